@@ -1,0 +1,653 @@
+"""Load a TOML configuration file and validate it into a frozen :class:`Model`.
+
+This is the only module that reads configuration files.  The flow is::
+
+    file --tomllib--> nested dict --overrides--> nested dict
+         --structure check--> flat {"section.field": raw value}
+         --per-field checks (SCHEMA, in order)--> flat {"section.field": value}
+         --consistency checks--> Model
+
+Every failure raises :class:`~codegen.errors.ConfigError` naming the file, the
+dotted field, the offending value and what is allowed.  Field checks are
+table driven: :data:`SCHEMA` maps each dotted field to its kind and allowed
+interval or choices.  An interval bound may refer to another field
+(:class:`Ref`), which must come earlier in :data:`SCHEMA`; defaults come from
+the dataclasses in :mod:`codegen.model`, so they are written down only once.
+"""
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import math
+import re
+import tomllib
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import NoReturn, get_args
+
+from codegen.errors import FILE_FIELD, MISSING, ConfigError, Marker
+from codegen.model import (
+    NUMBER_FORMATS,
+    PREDICTORS,
+    TABLE_SOURCES,
+    TARGETS,
+    THREE_LEVEL_STRATEGIES,
+    TWO_LEVEL_STRATEGIES,
+    Controller,
+    Derivation,
+    Inverter,
+    Model,
+    Motor,
+    Scenario,
+    SpeedLoop,
+    SpeedMode,
+    Topology,
+)
+
+__all__ = ["load_config", "parse_override", "SCHEMA", "Spec", "Interval", "Ref"]
+
+#: ``ConfigError.file`` for errors in command-line ``--set`` strings.
+COMMAND_LINE = "(command line)"
+
+STRATEGIES: tuple[str, ...] = TWO_LEVEL_STRATEGIES + THREE_LEVEL_STRATEGIES
+
+# C keywords (C89..C23) plus the common ``asm`` extension: a prefix equal to
+# one of these would still be a valid symbol prefix ("int_step"), but it is
+# almost certainly a mistake and is rejected.
+C_KEYWORDS: frozenset[str] = frozenset(
+    """
+    alignas alignof asm auto bool break case char const constexpr continue
+    default do double else enum extern false float for goto if inline int long
+    nullptr register restrict return short signed sizeof static static_assert
+    struct switch thread_local true typedef typeof typeof_unqual union unsigned
+    void volatile while
+    """.split()
+)
+PREFIX_PATTERN = r"^[a-z][a-z0-9_]{0,23}$"
+_PREFIX_RE = re.compile(PREFIX_PATTERN.strip("^$"))
+_OVERRIDE_KEY_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_-]*(\.[A-Za-z_][A-Za-z0-9_-]*)+")
+
+
+# --------------------------------------------------------------------------
+# schema
+
+
+def _num(x: float) -> str:
+    """Compact number text for messages (``5e-05``, ``312``, ``0.9``)."""
+    return f"{x:g}"
+
+
+@dataclass(frozen=True)
+class Ref:
+    """An interval bound taken from another, already validated field.
+
+    ``scale`` multiplies the other field; ``label`` names the result in
+    messages (default: the field path).
+    """
+
+    path: str
+    scale: float = 1.0
+    label: str | None = None
+
+    def resolve(self, values: Mapping[str, object]) -> float:
+        """The bound's numeric value."""
+        return float(values[self.path]) * self.scale  # type: ignore[arg-type]
+
+    def describe(self, values: Mapping[str, object]) -> str:
+        """``label = number`` for messages."""
+        return f"{self.label or self.path} = {_num(self.resolve(values))}"
+
+
+Bound = float | Ref
+
+
+@dataclass(frozen=True)
+class Interval:
+    """A real interval; each end closed or open, each bound fixed or a :class:`Ref`."""
+
+    lo: Bound
+    hi: Bound
+    lo_open: bool = False
+    hi_open: bool = False
+
+    @staticmethod
+    def _value(bound: Bound, values: Mapping[str, object]) -> float:
+        return bound.resolve(values) if isinstance(bound, Ref) else float(bound)
+
+    @staticmethod
+    def _text(bound: Bound, values: Mapping[str, object]) -> str:
+        return bound.describe(values) if isinstance(bound, Ref) else _num(bound)
+
+    def below(self, x: float, values: Mapping[str, object]) -> bool:
+        """True if ``x`` lies below the interval."""
+        lo = self._value(self.lo, values)
+        return x <= lo if self.lo_open else x < lo
+
+    def above(self, x: float, values: Mapping[str, object]) -> bool:
+        """True if ``x`` lies above the interval."""
+        hi = self._value(self.hi, values)
+        return x >= hi if self.hi_open else x > hi
+
+    def describe(self, values: Mapping[str, object]) -> str:
+        """E.g. ``(0, 100]`` or ``[0, Ts/3 = 1.66667e-05] (controller.dt_s = 5e-05)``."""
+        text = (
+            ("(" if self.lo_open else "[")
+            + f"{self._text(self.lo, values)}, {self._text(self.hi, values)}"
+            + (")" if self.hi_open else "]")
+        )
+        scaled = [b.path for b in (self.lo, self.hi) if isinstance(b, Ref) and b.scale != 1.0]
+        notes = [f"{p} = {_num(float(values[p]))}" for p in dict.fromkeys(scaled)]  # type: ignore[arg-type]
+        return text + (f" ({', '.join(notes)})" if notes else "")
+
+
+# field kinds
+REAL = "real"      # int or float (not bool), finite, in ``interval``
+INT = "int"        # int (not bool, not float), in ``interval``
+BOOL = "bool"      # true / false
+TEXT = "text"      # non-empty string
+CHOICE = "choice"  # string, one of ``choices``
+PREFIX = "prefix"  # C identifier prefix
+STEPS = "steps"    # [[time_s, value], ...] with values in ``interval``
+
+
+@dataclass(frozen=True)
+class Spec:
+    """How one field is checked.
+
+    ``hint_low`` / ``hint_high`` start the message when a number is below /
+    above the interval; ``hint`` replaces "must be one of" for a choice.
+    """
+
+    kind: str
+    interval: Interval | None = None
+    choices: tuple[str, ...] = ()
+    hint: str = ""
+    hint_low: str = ""
+    hint_high: str = ""
+
+
+def _oc(lo: Bound, hi: Bound) -> Interval:
+    return Interval(lo, hi, lo_open=True)
+
+
+def _cc(lo: Bound, hi: Bound) -> Interval:
+    return Interval(lo, hi)
+
+
+def _co(lo: Bound, hi: Bound) -> Interval:
+    return Interval(lo, hi, hi_open=True)
+
+
+def _oo(lo: Bound, hi: Bound) -> Interval:
+    return Interval(lo, hi, lo_open=True, hi_open=True)
+
+
+def _real(interval: Interval, **hints: str) -> Spec:
+    return Spec(REAL, interval, **hints)
+
+
+def _choice(choices: tuple[str, ...], hint: str = "") -> Spec:
+    return Spec(CHOICE, choices=tuple(choices), hint=hint)
+
+
+_RATED_RPM = "motor.rated_speed_rpm"
+
+#: Every config field, in check order (a :class:`Ref` must point upwards).
+#: The section of ``a.b.c`` is ``a.b``; the TOML layout follows from it.
+SCHEMA: dict[str, Spec] = {
+    "meta.name": Spec(TEXT),
+    "meta.prefix": Spec(PREFIX),
+    "motor.rs_ohm": _real(_oc(0, 100)),
+    "motor.ld_h": _real(_oc(0, 1)),
+    "motor.lq_h": _real(_oc(0, 1)),
+    "motor.psi_f_wb": _real(_oc(0, 10)),
+    "motor.pole_pairs": Spec(INT, _cc(1, 64)),
+    "motor.rated_speed_rpm": _real(_oc(0, 1e5)),
+    "motor.rated_torque_nm": _real(_oc(0, 1e5)),
+    "motor.j_kgm2": _real(_oc(0, 1e3)),
+    "motor.b_nms": _real(_cc(0, 1e3)),
+    "inverter.topology": _choice(get_args(Topology)),
+    "inverter.udc_v": _real(_oc(0, 1e4)),
+    "inverter.udc_min_v": _real(
+        _oo(0, Ref("inverter.udc_v")),
+        hint_high="DC-link undervoltage guard not below the nominal DC-link voltage",
+    ),
+    "inverter.udc_max_v": _real(
+        _oc(Ref("inverter.udc_v"), 2e4),
+        hint_low="DC-link overvoltage guard not above the nominal DC-link voltage",
+    ),
+    "inverter.i_trip_a": _real(_oc(0, 1e5)),
+    "inverter.c_f": _real(_oc(0, 1), hint_low="capacitance <= 0"),
+    "controller.strategy": _choice(STRATEGIES),
+    "controller.predictor": _choice(PREDICTORS),
+    "controller.delay_compensation": Spec(BOOL),
+    "controller.tables": _choice(TABLE_SOURCES),
+    "controller.dt_s": _real(_cc(1e-6, 1e-3)),
+    "controller.psi_ref_wb": _real(_oc(0, 10)),
+    "controller.eps_t_nm": _real(_co(0, Ref("motor.rated_torque_nm"))),
+    "controller.number_format": _choice(NUMBER_FORMATS, hint="number format not supported yet"),
+    "controller.lambda_psi_nm_per_wb": _real(_cc(0, 1e6)),
+    "controller.lambda_vo_nm_per_v": _real(_cc(0, 1e3)),
+    "controller.t_n_min_s": _real(
+        _cc(0, Ref("controller.dt_s", 1 / 3, "Ts/3")),
+        hint_high="T_N clamp minimum above Ts/3",
+    ),
+    "controller.derivation.coverage": _real(_oc(0, 1)),
+    "controller.derivation.max_active": Spec(INT, _cc(1, 6)),
+    "speed_loop.kp": _real(_cc(0, 1e6)),
+    "speed_loop.ki": _real(_cc(0, 1e6)),
+    "speed_loop.limit_nm": _real(_oc(0, 1e6)),
+    "scenario.duration_s": _real(_oc(0, 100)),
+    "scenario.speed_mode": _choice(get_args(SpeedMode)),
+    "scenario.speed_ref_rpm": Spec(
+        STEPS, _cc(Ref(_RATED_RPM, -10.0, "-10*rated"), Ref(_RATED_RPM, 10.0, "10*rated"))
+    ),
+    "scenario.load_nm": Spec(STEPS),
+    "target.name": _choice(TARGETS),
+}
+
+# Which dataclass holds each section's fields (for defaults and building the
+# Model), and the fields whose attribute name differs from the TOML key.
+_SECTION_CLASS: dict[str, type] = {
+    "meta": Model,
+    "motor": Motor,
+    "inverter": Inverter,
+    "controller": Controller,
+    "controller.derivation": Derivation,
+    "speed_loop": SpeedLoop,
+    "scenario": Scenario,
+    "target": Model,
+}
+_ATTR_NAME: dict[str, str] = {"target.name": "target"}
+
+
+def _section_of(path: str) -> str:
+    return path.rpartition(".")[0]
+
+
+def _key_of(path: str) -> str:
+    return path.rpartition(".")[2]
+
+
+def _attr_of(path: str) -> str:
+    return _ATTR_NAME.get(path, _key_of(path))
+
+
+SECTIONS: tuple[str, ...] = tuple(dict.fromkeys(_section_of(p) for p in SCHEMA))
+
+
+def _fields_of(section: str) -> list[str]:
+    """TOML keys of the fields directly in ``section``."""
+    return [_key_of(p) for p in SCHEMA if _section_of(p) == section]
+
+
+def _subsections_of(section: str) -> list[str]:
+    """Names of the tables directly inside ``section`` ("" is the top level)."""
+    return [_key_of(s) for s in SECTIONS if _section_of(s) == section]
+
+
+def _default(path: str) -> object:
+    """The model's default for a field, or :data:`MISSING` if it is required."""
+    attr = _attr_of(path)
+    for f in dataclasses.fields(_SECTION_CLASS[_section_of(path)]):
+        if f.name == attr:
+            if f.default is not dataclasses.MISSING:
+                return f.default
+            if f.default_factory is not dataclasses.MISSING:
+                return f.default_factory()
+            return MISSING
+    raise LookupError(f"schema field {path} has no model attribute {attr}")
+
+
+def _required(section: str) -> bool:
+    """A section is required if it has a field without a default."""
+    return any(_default(f"{section}.{k}") is MISSING for k in _fields_of(section))
+
+
+# --------------------------------------------------------------------------
+# checking
+
+
+class _Checker:
+    """Holds the file name, overridden fields and the values checked so far."""
+
+    def __init__(self, file: str, overridden: frozenset[str]) -> None:
+        self.file = file
+        self.overridden = overridden
+        self.values: dict[str, object] = {}
+
+    def fail(self, path: str, value: object, allowed: str) -> NoReturn:
+        """Raise a ConfigError; mention it if the value came from an override."""
+        base = path.split("[", 1)[0]
+        if any(o == base or o.startswith(base + ".") for o in self.overridden):
+            allowed += " (value set by override)"
+        raise ConfigError(self.file, path, value, allowed)
+
+
+def _is_number(value: object) -> bool:
+    """int or float, but not bool (bool is an int subclass in Python)."""
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def _check_real(ck: _Checker, path: str, value: object, spec: Spec) -> float | None:
+    assert spec.interval is not None
+    if value is None and _default(path) is None:
+        return None  # optional field left at "derive it" (e.g. t_n_min_s)
+    rng = spec.interval.describe(ck.values)
+    if isinstance(value, bool):
+        ck.fail(path, value, f"must be a number in {rng}, not a boolean")
+    if not _is_number(value):
+        ck.fail(path, value, f"must be a number in {rng}")
+    x = float(value)  # type: ignore[arg-type]
+    if not math.isfinite(x):
+        ck.fail(path, value, f"must be a finite number in {rng}")
+    _check_interval(ck, path, value, x, spec, f"must be in {rng}")
+    return x
+
+
+def _check_interval(ck: _Checker, path: str, value: object, x: float, spec: Spec, allowed: str) -> None:
+    """Fail if ``x`` is outside ``spec.interval``, prefixing the matching hint."""
+    assert spec.interval is not None
+    if spec.interval.below(x, ck.values):
+        ck.fail(path, value, f"{spec.hint_low}: {allowed}" if spec.hint_low else allowed)
+    if spec.interval.above(x, ck.values):
+        ck.fail(path, value, f"{spec.hint_high}: {allowed}" if spec.hint_high else allowed)
+
+
+def _check_int(ck: _Checker, path: str, value: object, spec: Spec) -> int:
+    assert spec.interval is not None
+    allowed = f"must be an integer in {spec.interval.describe(ck.values)}"
+    if isinstance(value, bool) or not isinstance(value, int):
+        ck.fail(path, value, allowed)
+    _check_interval(ck, path, value, float(value), spec, allowed)
+    return value
+
+
+def _check_bool(ck: _Checker, path: str, value: object, spec: Spec) -> bool:
+    if not isinstance(value, bool):
+        ck.fail(path, value, "must be true or false")
+    return value
+
+
+def _check_text(ck: _Checker, path: str, value: object, spec: Spec) -> str:
+    if not isinstance(value, str) or not value.strip():
+        ck.fail(path, value, "must be a non-empty string")
+    return value
+
+
+def _check_choice(ck: _Checker, path: str, value: object, spec: Spec) -> str:
+    options = ", ".join(spec.choices)
+    allowed = f"{spec.hint}, allowed: {options}" if spec.hint else f"must be one of {options}"
+    if not isinstance(value, str):
+        ck.fail(path, value, f"must be a string; {allowed}")
+    if value not in spec.choices:
+        ck.fail(path, value, allowed)
+    return value
+
+
+def _check_prefix(ck: _Checker, path: str, value: object, spec: Spec) -> str:
+    allowed = f"must be a C identifier matching {PREFIX_PATTERN} and not a C keyword"
+    if not isinstance(value, str) or not _PREFIX_RE.fullmatch(value):
+        ck.fail(path, value, allowed)
+    if value in C_KEYWORDS:
+        ck.fail(path, value, f"is a C keyword; {allowed}")
+    return value
+
+
+def _check_steps(ck: _Checker, path: str, value: object, spec: Spec) -> tuple[tuple[float, float], ...]:
+    """A piecewise-constant profile: [[0, v0], [t1, v1], ...] within the scenario."""
+    shape = "must be a non-empty list of [time_s, value] pairs"
+    if not isinstance(value, (list, tuple)) or not value:
+        ck.fail(path, value, shape)
+    duration = float(ck.values["scenario.duration_s"])  # type: ignore[arg-type]
+    steps: list[tuple[float, float]] = []
+    for i, item in enumerate(value):
+        where = f"{path}[{i}]"
+        if not (isinstance(item, (list, tuple)) and len(item) == 2 and all(map(_is_number, item))):
+            ck.fail(where, item, f"must be a [time_s, value] pair of numbers ({path} {shape})")
+        t, v = float(item[0]), float(item[1])
+        if not (math.isfinite(t) and math.isfinite(v)):
+            ck.fail(where, item, "time and value must be finite numbers")
+        if i == 0 and t != 0.0:
+            ck.fail(where, item, "the first time must be exactly 0")
+        if steps and t <= steps[-1][0]:
+            ck.fail(where, item, f"times must be strictly increasing: {_num(t)} <= previous time {_num(steps[-1][0])}")
+        if t >= duration:
+            ck.fail(where, item, f"time must be < scenario.duration_s = {_num(duration)}")
+        if spec.interval is not None:
+            _check_interval(ck, where, item, v, spec, f"value must be in {spec.interval.describe(ck.values)}")
+        steps.append((t, v))
+    return tuple(steps)
+
+
+_CHECKS: dict[str, Callable[[_Checker, str, object, Spec], object]] = {
+    REAL: _check_real,
+    INT: _check_int,
+    BOOL: _check_bool,
+    TEXT: _check_text,
+    CHOICE: _check_choice,
+    PREFIX: _check_prefix,
+    STEPS: _check_steps,
+}
+
+
+# --------------------------------------------------------------------------
+# consistency between fields
+
+
+def _check_predictor_geometry(ck: _Checker) -> None:
+    v = ck.values
+    if v["controller.predictor"] == "flux-geometry" and v["motor.ld_h"] != v["motor.lq_h"]:
+        ck.fail(
+            "controller.predictor",
+            v["controller.predictor"],
+            'flux-geometry predictor needs Ld == Lq (surface PMSM); use predictor = "dq-euler" '
+            f"(motor.ld_h = {_num(v['motor.ld_h'])}, motor.lq_h = {_num(v['motor.lq_h'])})",  # type: ignore[arg-type]
+        )
+
+
+def _check_topology(ck: _Checker) -> None:
+    v = ck.values
+    strategy, topology = v["controller.strategy"], v["inverter.topology"]
+    needed, fitting = (
+        ("two-level", TWO_LEVEL_STRATEGIES)
+        if strategy in TWO_LEVEL_STRATEGIES
+        else ("t-type", THREE_LEVEL_STRATEGIES)
+    )
+    if topology != needed:
+        others = THREE_LEVEL_STRATEGIES if needed == "two-level" else TWO_LEVEL_STRATEGIES
+        ck.fail(
+            "controller.strategy",
+            strategy,
+            f"strategy {strategy} needs inverter.topology = '{needed}' but inverter.topology = "
+            f"'{topology}'; strategies for '{topology}': {', '.join(others)} "
+            f"(for '{needed}': {', '.join(fitting)})",
+        )
+
+
+def _check_three_level_motor(ck: _Checker) -> None:
+    v = ck.values
+    if v["controller.strategy"] in THREE_LEVEL_STRATEGIES and v["motor.ld_h"] != v["motor.lq_h"]:
+        ck.fail(
+            "controller.strategy",
+            v["controller.strategy"],
+            "three-level MPDTC needs Ld == Lq (surface PMSM model of the spec); "
+            f"motor.ld_h = {_num(v['motor.ld_h'])}, motor.lq_h = {_num(v['motor.lq_h'])}",  # type: ignore[arg-type]
+        )
+
+
+_CONSISTENCY: tuple[Callable[[_Checker], None], ...] = (
+    _check_topology,
+    _check_three_level_motor,
+    _check_predictor_geometry,
+)
+
+
+# --------------------------------------------------------------------------
+# reading, structure, overrides
+
+
+def _read_toml(file: str) -> dict:
+    """Parse the file; any failure is a ConfigError on field ``(file)``."""
+    try:
+        blob = Path(file).read_bytes()
+    except FileNotFoundError as exc:
+        raise ConfigError(file, FILE_FIELD, file, "file not found; expected a TOML config file") from exc
+    except IsADirectoryError as exc:
+        raise ConfigError(file, FILE_FIELD, file, "is a directory; expected a TOML config file") from exc
+    except OSError as exc:
+        raise ConfigError(file, FILE_FIELD, file, f"cannot read file: {exc.strerror or exc}") from exc
+    try:
+        text = blob.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ConfigError(
+            file, FILE_FIELD, Marker("<binary data>"),
+            f"not TOML: not UTF-8 text (byte {blob[exc.start]:#04x} at offset {exc.start})",
+        ) from exc
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(file, FILE_FIELD, _offending_line(text, str(exc)), f"not TOML: {exc}") from exc
+
+
+def _offending_line(text: str, message: str) -> object:
+    """The source line a TOML error message points at (or a marker)."""
+    m = re.search(r"at line (\d+)", message)
+    lines = text.splitlines()
+    if m and 1 <= int(m.group(1)) <= len(lines) and lines[int(m.group(1)) - 1].strip():
+        return lines[int(m.group(1)) - 1].strip()
+    return Marker("<not TOML>")
+
+
+def _apply_overrides(ck: _Checker, data: dict, overrides: Mapping[str, object]) -> None:
+    """Set each dotted ``section.field`` in the parsed document (in place)."""
+    for key, value in overrides.items():
+        parts = key.split(".")
+        if len(parts) < 2 or not all(parts):
+            ck.fail(key, value, "an override must name a dotted field such as controller.strategy")
+        node = data
+        for i, part in enumerate(parts[:-1]):
+            node = node.setdefault(part, {})
+            if not isinstance(node, dict):
+                ck.fail(".".join(parts[: i + 1]), node, f"must be a table to apply override {key}")
+        node[parts[-1]] = value
+
+
+def _lookup_table(ck: _Checker, data: dict, section: str) -> dict | None:
+    """The table for a dotted section, None if absent, error if not a table."""
+    node: object = data
+    for part in section.split("."):
+        node = node.get(part) if isinstance(node, dict) else None
+        if node is None:
+            return None
+    if not isinstance(node, dict):
+        ck.fail(section, node, f"must be a table [{section}]")
+    return node
+
+
+def _check_keys(ck: _Checker, section: str, table: dict) -> None:
+    """Reject keys that are neither fields nor sub-sections of ``section``."""
+    fields, subs = _fields_of(section), _subsections_of(section)
+    known = fields + subs
+    for key, value in table.items():
+        if key in known:
+            continue
+        guess = difflib.get_close_matches(key, known, n=1)
+        maybe = f" (did you mean '{guess[0]}'?)" if guess else ""
+        if section:
+            tables = f"; sections: {', '.join(f'[{section}.{s}]' for s in subs)}" if subs else ""
+            ck.fail(f"{section}.{key}", value,
+                    f"unknown field in [{section}]{maybe}; allowed fields: {', '.join(fields)}{tables}")
+        ck.fail(key, value, f"unknown section{maybe}; allowed sections: {', '.join(subs)}")
+
+
+def _collect(ck: _Checker, data: dict) -> dict[str, object]:
+    """Check the document's structure; return raw values by dotted path (defaults filled in)."""
+    _check_keys(ck, "", data)
+    raw: dict[str, object] = {}
+    for section in SECTIONS:
+        table = _lookup_table(ck, data, section)
+        if table is None:
+            if _required(section):
+                ck.fail(section, MISSING, f"required section [{section}] is missing; "
+                        f"sections: {', '.join(f'[{s}]' for s in SECTIONS)}")
+            table = {}
+        else:
+            _check_keys(ck, section, table)
+        for key in _fields_of(section):
+            path = f"{section}.{key}"
+            raw[path] = table[key] if key in table else _default(path)
+            if raw[path] is MISSING:
+                ck.fail(path, MISSING, f"required field missing in [{section}]; "
+                        f"fields: {', '.join(_fields_of(section))}")
+    return raw
+
+
+def _build(values: Mapping[str, object], source: str) -> Model:
+    """Assemble the frozen Model from checked values."""
+
+    def kw(section: str) -> dict[str, object]:
+        return {_attr_of(p): values[p] for p in SCHEMA if _section_of(p) == section}
+
+    return Model(
+        **kw("meta"),
+        **kw("target"),
+        source=source,
+        motor=Motor(**kw("motor")),
+        inverter=Inverter(**kw("inverter")),
+        controller=Controller(**kw("controller"), derivation=Derivation(**kw("controller.derivation"))),
+        speed_loop=SpeedLoop(**kw("speed_loop")),
+        scenario=Scenario(**kw("scenario")),
+    )  # type: ignore[arg-type]
+
+
+# --------------------------------------------------------------------------
+# public API
+
+
+def load_config(path: str | Path, overrides: Mapping[str, object] | None = None) -> Model:
+    """Read, override and validate a TOML config file.
+
+    Args:
+        path: the config file; kept as given in ``Model.source`` and messages.
+        overrides: dotted field paths to values (e.g.
+            ``{"controller.strategy": "s2"}``), applied to the parsed file
+            before validation, so they are checked exactly like file values.
+
+    Raises:
+        ConfigError: for the first problem found (file, structure, type,
+            range, consistency).
+    """
+    source = str(path)
+    overrides = overrides or {}
+    data = _read_toml(source)
+    ck = _Checker(source, frozenset(overrides))
+    _apply_overrides(ck, data, overrides)
+    raw = _collect(ck, data)
+    for field_path, spec in SCHEMA.items():
+        ck.values[field_path] = _CHECKS[spec.kind](ck, field_path, raw[field_path], spec)
+    for check in _CONSISTENCY:
+        check(ck)
+    return _build(ck.values, source)
+
+
+def parse_override(text: str) -> tuple[str, object]:
+    """Parse a command-line ``section.field=value`` string.
+
+    The value is read as a TOML value if possible (``true``, ``5e-5``,
+    ``"s2"``, ``[[0, 500]]``), otherwise taken as a bare string (``s2``).
+
+    Raises:
+        ConfigError: if ``text`` is not of the form ``section.field=value``.
+    """
+    key, sep, raw = text.partition("=")
+    key, raw = key.strip(), raw.strip()
+    if not sep or not _OVERRIDE_KEY_RE.fullmatch(key):
+        raise ConfigError(COMMAND_LINE, "--set", text,
+                          "must be section.field=value, e.g. controller.strategy=s2")
+    try:
+        doc = tomllib.loads(f"v = {raw}")
+    except tomllib.TOMLDecodeError:
+        return key, raw
+    return (key, doc["v"]) if list(doc) == ["v"] else (key, raw)

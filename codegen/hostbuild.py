@@ -1,0 +1,164 @@
+"""Host build of the generated C through cffi (render -> compile -> load).
+
+The generated controller and the hand-written runtime are compiled with the
+same strictness as the target builds (``STRICT_CFLAGS``, -Werror) into object
+files by a direct compiler call; cffi then links them into an extension
+module (its own glue is compiled with cffi's default flags, since it is not
+ours to make -Wconversion clean).  Builds are cached by a hash of every
+input byte, so a rebuilt config reuses its library.
+"""
+from __future__ import annotations
+
+import hashlib
+import importlib.util
+import os
+import shutil
+import subprocess
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+import cffi
+
+from .errors import MpcgenError
+from .model import Model
+from .render import environment, render_two_level, two_level_context, write_files
+from .resources import firmware_dir
+from .twolevel.derive import TwoLevelTables
+from .twolevel.interface import INPUT_DTYPE, INPUT_FIELDS, OUTPUT_DTYPE, OUTPUT_FIELDS
+
+#: Flags every build of generated C uses (README "Standards", numerics.md).
+STRICT_CFLAGS: tuple[str, ...] = (
+    "-std=c99", "-O2", "-Wall", "-Wextra", "-Wconversion", "-Wdouble-promotion", "-Werror",
+    "-ffp-contract=off", "-fno-math-errno",
+)
+SIM_SOURCES = ("runtime/plant2l.c", "runtime/sim2l.c")
+SIM_API = "runtime/sim2l_api.h"
+
+
+class BuildError(MpcgenError):
+    """The C compiler failed or is missing."""
+
+
+@dataclass(frozen=True)
+class HostLib:
+    """A loaded host build: cffi ``ffi`` and ``lib`` plus where it was built."""
+
+    ffi: Any
+    lib: Any
+    build_dir: Path
+    prefix: str
+    has_sim: bool
+
+    def step_batch(self, states: Any) -> Any:
+        """Run the compiled step over a numpy INPUT_DTYPE array; return OUTPUT_DTYPE."""
+        import numpy as np
+
+        states = np.ascontiguousarray(states, dtype=INPUT_DTYPE)
+        out = np.zeros(len(states), OUTPUT_DTYPE)
+        fn = getattr(self.lib, f"{self.prefix}_step_batch")
+        pin = self.ffi.cast(f"{self.prefix}_input_t *", self.ffi.from_buffer(states))
+        pout = self.ffi.cast(f"{self.prefix}_output_t *", self.ffi.from_buffer(out))
+        fn(pin, pout, len(states))
+        return out
+
+
+def cache_root() -> Path:
+    """Build cache directory (MPCGEN_CACHE, else ~/.cache/mpcgen)."""
+    root = os.environ.get("MPCGEN_CACHE") or str(Path.home() / ".cache" / "mpcgen")
+    return Path(root)
+
+
+def compiler() -> str:
+    """The host C compiler (CC or gcc); a clear error if there is none."""
+    cc = os.environ.get("CC", "gcc")
+    if shutil.which(cc) is None:
+        raise BuildError(f"host C compiler '{cc}' not found: install gcc (apt-get install gcc) or set CC")
+    return cc
+
+
+def compile_object(src: Path, obj: Path, include_dirs: list[Path], extra: tuple[str, ...] = ()) -> None:
+    """Compile one C file with STRICT_CFLAGS (+ -fPIC); raise BuildError with the diagnostics."""
+    cmd = [compiler(), *STRICT_CFLAGS, "-fPIC", *extra, *[f"-I{d}" for d in include_dirs], "-c", str(src), "-o", str(obj)]
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    if r.returncode != 0:
+        raise BuildError(f"compiling {src.name} failed:\n{' '.join(cmd)}\n{r.stderr}")
+
+
+def _cdef(model: Model, t: TwoLevelTables) -> str:
+    ctx = two_level_context(model, t, "host")
+    return environment().get_template("twolevel/cdef.h.j2").render(ctx)
+
+
+def build_host_library(model: Model, t: TwoLevelTables, with_sim: bool = True) -> HostLib:
+    """Render the host profile, compile strictly, link with cffi, load (cached)."""
+    files = render_two_level(model, t, "host")
+    fw = firmware_dir()
+    cdef = _cdef(model, t)
+    sim_api = (fw / SIM_API).read_text() if with_sim else ""
+    key_src = [cdef, sim_api, " ".join(STRICT_CFLAGS), cffi.__version__, sys.version]
+    key_src += [files[k] for k in sorted(files)]
+    if with_sim:
+        key_src += [(fw / s).read_text() for s in SIM_SOURCES] + [(fw / "runtime/plant2l.h").read_text()]
+    key = hashlib.sha256("\0".join(key_src).encode()).hexdigest()[:16]
+    modname = f"_mpc_{model.prefix}_{key}"
+    bdir = cache_root() / modname
+    so = _find_module(bdir, modname)
+    if so is None:
+        bdir.mkdir(parents=True, exist_ok=True)
+        write_files(files, bdir)
+        objs = []
+        sources = [bdir / f"{model.prefix}_mpc.c"]
+        if with_sim:
+            sources += [fw / s for s in SIM_SOURCES]
+        for src in sources:
+            obj = bdir / (src.stem + ".o")
+            compile_object(src, obj, [bdir, fw / "runtime"])
+            objs.append(str(obj))
+        ffi = cffi.FFI()
+        ffi.cdef(cdef + "\n" + sim_api)
+        includes = '#include "mpc_binding.h"\n' + ('#include "sim2l_api.h"\n' if with_sim else "")
+        ffi.set_source(modname, includes, include_dirs=[str(bdir), str(fw / "runtime")],
+                       extra_objects=objs, libraries=["m"])
+        try:
+            ffi.compile(tmpdir=str(bdir), verbose=False)
+        except Exception as exc:  # cffi raises distutils/setuptools errors
+            raise BuildError(f"linking the cffi module {modname} failed: {exc}") from exc
+        so = _find_module(bdir, modname)
+        if so is None:
+            raise BuildError(f"cffi produced no module in {bdir}")
+    mod = _load(modname, so)
+    lib = HostLib(mod.ffi, mod.lib, bdir, model.prefix, with_sim)
+    _check_layout(lib)
+    return lib
+
+
+def _find_module(bdir: Path, modname: str) -> Path | None:
+    if not bdir.is_dir():
+        return None
+    hits = sorted(bdir.glob(f"{modname}*.so")) + sorted(bdir.glob(f"{modname}*.pyd"))
+    return hits[0] if hits else None
+
+
+def _load(modname: str, path: Path) -> ModuleType:
+    if modname in sys.modules:
+        return sys.modules[modname]
+    spec = importlib.util.spec_from_file_location(modname, path)
+    assert spec and spec.loader
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    sys.modules[modname] = mod
+    return mod
+
+
+def _check_layout(lib: HostLib) -> None:
+    """The numpy records must match the C structs byte for byte."""
+    ffi, p = lib.ffi, lib.prefix
+    for ctype, dtype, fields in ((f"{p}_input_t", INPUT_DTYPE, INPUT_FIELDS), (f"{p}_output_t", OUTPUT_DTYPE, OUTPUT_FIELDS)):
+        if ffi.sizeof(ctype) != dtype.itemsize:
+            raise BuildError(f"{ctype}: C size {ffi.sizeof(ctype)} != numpy {dtype.itemsize}")
+        for f in fields:
+            if ffi.offsetof(ctype, f.name) != dtype.fields[f.name][1]:
+                raise BuildError(f"{ctype}.{f.name}: C offset differs from numpy")

@@ -1,0 +1,138 @@
+"""Validated, frozen configuration model (SI units throughout).
+
+Data flows one way: TOML file -> ``codegen.config.load_config`` -> ``Model``
+(this module) -> derived tables -> (templates -> C) and (Python reference).
+Nothing downstream re-reads the TOML file; everything downstream takes a
+``Model``.  Field names carry their unit (``_ohm``, ``_h``, ``_wb``, ``_s``,
+``_v``, ``_a``, ``_nm``, ``_rpm``).
+"""
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+from dataclasses import dataclass, field
+from typing import Literal
+
+Topology = Literal["two-level", "t-type"]
+Strategy = Literal["conventional", "s1", "s2", "s3", "mpdtc27", "mpdtc63"]
+Predictor = Literal["flux-geometry", "dq-euler"]
+TableSource = Literal["derived", "published"]
+Target = Literal["host", "stm32h743", "tms320f28377"]
+SpeedMode = Literal["mechanical", "imposed"]
+
+TWO_LEVEL_STRATEGIES: tuple[str, ...] = ("conventional", "s1", "s2", "s3")
+THREE_LEVEL_STRATEGIES: tuple[str, ...] = ("mpdtc27", "mpdtc63")
+PREDICTORS: tuple[str, ...] = ("flux-geometry", "dq-euler")
+TABLE_SOURCES: tuple[str, ...] = ("derived", "published")
+TARGETS: tuple[str, ...] = ("host", "stm32h743", "tms320f28377")
+NUMBER_FORMATS: tuple[str, ...] = ("float32",)
+
+
+@dataclass(frozen=True)
+class Motor:
+    """PMSM parameters (dq model, amplitude-invariant transforms)."""
+
+    rs_ohm: float
+    ld_h: float
+    lq_h: float
+    psi_f_wb: float
+    pole_pairs: int
+    rated_speed_rpm: float
+    rated_torque_nm: float
+    j_kgm2: float
+    b_nms: float = 0.0
+
+
+@dataclass(frozen=True)
+class Inverter:
+    """Inverter and DC link, plus the measurement guard limits of numerics.md."""
+
+    topology: Topology
+    udc_v: float
+    udc_min_v: float
+    udc_max_v: float
+    i_trip_a: float
+    c_f: float = 1000e-6  # each DC-link capacitor (t-type only)
+
+
+@dataclass(frozen=True)
+class Derivation:
+    """Rule for deriving switch tables from utilisation (mptc-two-level.md)."""
+
+    coverage: float = 0.90
+    max_active: int = 3
+
+
+@dataclass(frozen=True)
+class Controller:
+    """What the generated step computes."""
+
+    strategy: Strategy
+    predictor: Predictor
+    delay_compensation: bool
+    tables: TableSource
+    dt_s: float
+    psi_ref_wb: float
+    eps_t_nm: float
+    number_format: str = "float32"
+    derivation: Derivation = field(default_factory=Derivation)
+    # three-level MPDTC only (mpdtc-three-level.md, eq. (7) and (10)-(11))
+    lambda_psi_nm_per_wb: float = 28.0
+    lambda_vo_nm_per_v: float = 0.01
+    t_n_min_s: float | None = None  # None: Ts/6 as in the seed
+
+
+@dataclass(frozen=True)
+class SpeedLoop:
+    """Speed PI on the mechanical speed error in rad/s, output clamped."""
+
+    kp: float
+    ki: float
+    limit_nm: float
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """Closed-loop scenario: piecewise-constant steps given as (time_s, value)."""
+
+    duration_s: float
+    speed_ref_rpm: tuple[tuple[float, float], ...]
+    load_nm: tuple[tuple[float, float], ...]
+    speed_mode: SpeedMode = "mechanical"
+
+
+@dataclass(frozen=True)
+class Model:
+    """The whole validated configuration."""
+
+    name: str
+    prefix: str
+    source: str  # path of the file it came from (for messages only)
+    motor: Motor
+    inverter: Inverter
+    controller: Controller
+    speed_loop: SpeedLoop
+    scenario: Scenario
+    target: Target = "host"
+
+    def replace(self, **sections: object) -> "Model":
+        """Return a copy with whole sections or top-level fields replaced."""
+        return dataclasses.replace(self, **sections)  # type: ignore[arg-type]
+
+    def with_controller(self, **fields: object) -> "Model":
+        """Return a copy with some controller fields replaced."""
+        return dataclasses.replace(
+            self, controller=dataclasses.replace(self.controller, **fields)  # type: ignore[arg-type]
+        )
+
+    def as_dict(self) -> dict:
+        """Plain-dict view (for JSON reports); ``source`` is left out."""
+        d = dataclasses.asdict(self)
+        d.pop("source", None)
+        return d
+
+    def config_hash(self) -> str:
+        """SHA-256 (hex, 16 chars) of the canonical JSON of the model."""
+        blob = json.dumps(self.as_dict(), sort_keys=True, separators=(",", ":"))
+        return hashlib.sha256(blob.encode()).hexdigest()[:16]

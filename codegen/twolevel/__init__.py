@@ -1,0 +1,1 @@
+"""Two-level inverter MPTC (seed 001): published data, switch-table derivation."""

@@ -1,0 +1,1 @@
+"""jinja2 templates of the generated C (package data, see codegen/resources.py)."""
