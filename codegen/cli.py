@@ -1,0 +1,254 @@
+"""``mpcgen`` command line: generate, verify, simulate, tables, bench, firmware.
+
+Exit codes: 0 success; 1 the job ran and failed (mismatches, build failure);
+2 bad input (config, arguments) -- one line on stderr, no traceback.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+from typing import Callable, Sequence
+
+from . import __version__
+from .errors import ConfigError, MpcgenError
+from .model import THREE_LEVEL_STRATEGIES, TWO_LEVEL_STRATEGIES, Model
+
+EXIT_OK, EXIT_FAIL, EXIT_BAD_INPUT = 0, 1, 2
+
+
+class UsageError(MpcgenError):
+    """A command-line argument is invalid (exit code 2)."""
+
+
+def _err(msg: str) -> None:
+    print(f"mpcgen: error: {msg}", file=sys.stderr)
+
+
+def _log(quiet: bool) -> Callable[[str], None]:
+    def log(msg: str) -> None:
+        if not quiet:
+            print(msg, file=sys.stderr, flush=True)
+
+    return log
+
+
+def _add_config_args(p: argparse.ArgumentParser, target: bool = False) -> None:
+    p.add_argument("config", help="configuration file (TOML)")
+    p.add_argument("--strategy", help="override controller.strategy")
+    p.add_argument("--predictor", help="override controller.predictor (flux-geometry, dq-euler)")
+    p.add_argument("--tables", help="override controller.tables (derived, published)")
+    dc = p.add_mutually_exclusive_group()
+    dc.add_argument("--delay-compensation", dest="delay", action="store_const", const=True, help="predict k+2 (one-step delay compensation)")
+    dc.add_argument("--no-delay-compensation", dest="delay", action="store_const", const=False)
+    if target:
+        p.add_argument("--target", help="override target.name (host, stm32h743, tms320f28377)")
+    p.add_argument("--set", dest="sets", action="append", default=[], metavar="SECTION.FIELD=VALUE",
+                   help="override any config field (repeatable), e.g. --set controller.eps_t_nm=0.5")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress output")
+
+
+def _load(args: argparse.Namespace) -> Model:
+    from .config import load_config, parse_override
+
+    overrides: dict[str, object] = {}
+    for text in args.sets:
+        k, v = parse_override(text)
+        overrides[k] = v
+    for attr, key in (("strategy", "controller.strategy"), ("predictor", "controller.predictor"),
+                      ("tables", "controller.tables"), ("delay", "controller.delay_compensation"),
+                      ("target", "target.name")):
+        v = getattr(args, attr, None)
+        if v is not None:
+            overrides[key] = v
+    return load_config(args.config, overrides)
+
+
+def _strategies(args: argparse.Namespace, model: Model) -> list[str]:
+    family = TWO_LEVEL_STRATEGIES if model.inverter.topology == "two-level" else THREE_LEVEL_STRATEGIES
+    if getattr(args, "strategies", None):
+        chosen = [s.strip() for s in args.strategies.split(",") if s.strip()]
+        for s in chosen:
+            if s not in family:
+                raise UsageError(f"--strategies: '{s}' is not a strategy of a {model.inverter.topology} inverter; allowed: {', '.join(family)}")
+        return chosen
+    return list(family)
+
+
+def _write_json(path: str | None, data: dict) -> None:
+    if path:
+        Path(path).parent.mkdir(parents=True, exist_ok=True)
+        Path(path).write_text(json.dumps(data, indent=2, sort_keys=True) + "\n")
+
+
+# ---------------------------------------------------------------- generate
+def cmd_generate(args: argparse.Namespace) -> int:
+    from .generate import generate
+
+    model = _load(args)
+    log = _log(args.quiet)
+    paths = generate(model, Path(args.output), log=log)
+    for p in paths:
+        print(p)
+    return EXIT_OK
+
+
+# ---------------------------------------------------------------- verify
+def cmd_verify(args: argparse.Namespace) -> int:
+    from .verify import verify_strategy
+
+    model = _load(args)
+    if args.states < 1:
+        raise UsageError(f"--states = {args.states}: must be >= 1")
+    log = _log(args.quiet)
+    results = []
+    for s in _strategies(args, model):
+        variant = model.with_controller(strategy=s)
+        log(f"verify {model.name} / {s}: building and comparing {args.states} states")
+        r = verify_strategy(variant, args.states, log=log, closed_loop=not args.no_closed_loop)
+        results.append(r)
+        print(f"{s:12s} states {r.states:>9d}  mismatches {r.mismatches}  ({r.states_per_s:,.0f} states/s, "
+              f"closed-loop {r.sources.get('closed_loop', 0)}, adversarial {r.sources['adversarial']}, "
+              f"random {r.sources['random']}, guard trips {r.faulted_states})")
+        if r.mismatches:
+            print(r.first_mismatch)
+    _write_json(args.json, {
+        "config": model.name, "config_hash": model.config_hash(), "version": __version__,
+        "strategies": {r.strategy: r.as_dict() for r in results},
+    })
+    return EXIT_OK if all(r.mismatches == 0 for r in results) else EXIT_FAIL
+
+
+# ---------------------------------------------------------------- simulate
+def cmd_simulate(args: argparse.Namespace) -> int:
+    from .runs import run_scenarios, run_threshold_sweep
+
+    model = _load(args)
+    log = _log(args.quiet)
+    if args.sweep_eps:
+        data = run_threshold_sweep(model, args.sweep_eps, log=log)
+    else:
+        data = run_scenarios(model, _strategies(args, model), plots=Path(args.plots) if args.plots else None, log=log)
+    print(data.pop("_table"))
+    _write_json(args.json, data)
+    return EXIT_OK
+
+
+# ---------------------------------------------------------------- tables
+def cmd_tables(args: argparse.Namespace) -> int:
+    from .tables_cmd import tables_text
+
+    model = _load(args)
+    print(tables_text(model, args.utilisation, log=_log(args.quiet)))
+    return EXIT_OK
+
+
+# ---------------------------------------------------------------- bench
+def cmd_bench(args: argparse.Namespace) -> int:
+    from .bench import bench
+
+    model = _load(args)
+    data = bench(model, _strategies(args, model), emulated=args.emulated, repeats=args.repeats, log=_log(args.quiet))
+    print(data.pop("_table"))
+    _write_json(args.json, data)
+    return EXIT_OK
+
+
+# ---------------------------------------------------------------- firmware
+def cmd_firmware(args: argparse.Namespace) -> int:
+    from .firmware import write_firmware_project
+    from .twolevel.switch_tables import tables_for
+
+    model = _load(args)
+    paths = write_firmware_project(model, tables_for(model), args.board, Path(args.output))
+    print(f"wrote {len(paths)} files to {args.output}; build with: make -C {args.output}")
+    return EXIT_OK
+
+
+def _parse_sweep(text: str) -> list[float]:
+    try:
+        if ":" in text:
+            a, b, c = (float(v) for v in text.split(":"))
+            n = int(round((b - a) / c)) + 1
+            vals = [round(a + i * c, 10) for i in range(n)]
+        else:
+            vals = [float(v) for v in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}': expected START:STOP:STEP (e.g. 0.1:1.5:0.1) or a comma list") from None
+    if not vals or any(v < 0 for v in vals):
+        raise argparse.ArgumentTypeError(f"'{text}': thresholds must be >= 0")
+    return vals
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="mpcgen", description="FCS-MPC code generator for PMSM drives: generate, verify bit for bit, simulate, benchmark.")
+    p.add_argument("--version", action="version", version=f"mpcgen {__version__}")
+    sub = p.add_subparsers(dest="command", required=True)
+
+    g = sub.add_parser("generate", help="write the C controller for a target")
+    _add_config_args(g, target=True)
+    g.add_argument("-o", "--output", required=True, help="output directory")
+    g.set_defaults(func=cmd_generate)
+
+    v = sub.add_parser("verify", help="compiled C vs Python reference, bit for bit")
+    _add_config_args(v)
+    v.add_argument("--states", type=int, default=1_000_000, help="states per strategy (default 1000000)")
+    v.add_argument("--strategies", help="comma list (default: every strategy of the topology)")
+    v.add_argument("--no-closed-loop", action="store_true", help="skip the recorded closed-loop states")
+    v.add_argument("--json", help="write results as JSON")
+    v.set_defaults(func=cmd_verify)
+
+    s = sub.add_parser("simulate", help="closed-loop scenario runs with the paper's metrics")
+    _add_config_args(s)
+    s.add_argument("--strategies", help="comma list (default: all of the topology)")
+    s.add_argument("--json", help="write metrics as JSON")
+    s.add_argument("--plots", help="directory for PNG plots")
+    s.add_argument("--sweep-eps", type=_parse_sweep, metavar="START:STOP:STEP",
+                   help="threshold sweep of seed-001 Table 1/2 with strategy s1 (e.g. 0.1:1.5:0.1)")
+    s.set_defaults(func=cmd_simulate)
+
+    t = sub.add_parser("tables", help="print derived switch tables and vector sets")
+    _add_config_args(t)
+    t.add_argument("--utilisation", choices=("published", "training"), default="training",
+                   help="derive from the seed's published utilisation tables or from a training run (default)")
+    t.set_defaults(func=cmd_tables)
+
+    b = sub.add_parser("bench", help="execution cost per step, all strategies side by side")
+    _add_config_args(b)
+    b.add_argument("--strategies", help="comma list (default: all of the topology)")
+    b.add_argument("--emulated", action="store_true", help="instructions per step on the emulated Cortex-M7 (QEMU)")
+    b.add_argument("--repeats", type=int, default=5, help="timing repeats, best kept (default 5)")
+    b.add_argument("--json", help="write results as JSON")
+    b.set_defaults(func=cmd_bench)
+
+    f = sub.add_parser("firmware", help="write a buildable firmware project for a board")
+    _add_config_args(f)
+    f.add_argument("--board", required=True, help="stm32h743, tms320f28377, qemu-m7 or host")
+    f.add_argument("-o", "--output", required=True, help="output directory")
+    f.set_defaults(func=cmd_firmware)
+    return p
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # argparse: 2 on bad usage, 0 on --help
+        return int(exc.code or 0)
+    try:
+        return int(args.func(args))
+    except (ConfigError, UsageError) as exc:
+        _err(str(exc))
+        return EXIT_BAD_INPUT
+    except MpcgenError as exc:
+        _err(str(exc))
+        return EXIT_FAIL
+    except KeyboardInterrupt:
+        _err("interrupted")
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

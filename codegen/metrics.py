@@ -1,0 +1,387 @@
+"""Metrics of closed-loop two-level runs, with the names of seed 001.
+
+Definitions (shared/spec/plant-and-metrics.md "Metrics"; seed 001 = Li Yaohua
+et al., Control Theory & Applications 40(10), 2023, eq. (7)-(10)):
+
+* ``T_rip_RMSE = sqrt(sum_i (Te_i - T*_i)^2 / n)``            seed eq. (7)
+* ``psi_rip_RMSE = sqrt(sum_i (|psi_s|_i - psi*)^2 / n)``      seed eq. (8)
+* ``f_ave = N_switching / (6 t)``                              seed eq. (9)
+  N_switching counts the on/off changes of the six switches (upper and lower
+  of each leg); every change of a leg's state turns one switch on and its
+  complement off, i.e. 2 switch changes, so f_ave = (leg state changes) /
+  (3 legs * t): leg commutations per second per leg, as the spec words it.
+* ``Cal_ave = Cal / n``                                        seed eq. (10)
+* THD of i_a: FFT over an integer number of fundamental periods inside a
+  steady window, ``THD = sqrt(sum_{h>=2} I_h^2) / I_1`` over the harmonics up
+  to 10 kHz (or fs/2, whichever is lower).
+
+Te and |psi_s| are the plant's (float64) values at the sample instants; T*
+is the torque reference given to the controller; psi* = controller.psi_ref_wb.
+Everything is vectorised numpy; nothing loops over samples in Python.
+"""
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .model import Model
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .simulate import Trace
+
+__all__ = [
+    "steady_windows",
+    "window_slice",
+    "window_mask",
+    "rmse",
+    "ripple_stats",
+    "amplitude_spectrum",
+    "thd",
+    "leg_commutations",
+    "f_ave_hz",
+    "cal_ave",
+    "thd_window",
+    "two_level_metrics",
+]
+
+# Tolerance, in samples / periods, for mapping times onto the sample grid.
+_TOL = 1e-6
+
+
+# ---------------------------------------------------------------------------
+# windows
+# ---------------------------------------------------------------------------
+def _change_times(steps: tuple[tuple[float, float], ...], duration_s: float) -> set[float]:
+    """Times in (0, duration) where a piecewise-constant reference changes value."""
+    out: set[float] = set()
+    prev = 0.0  # value before the first step (simulate.scenario_arrays uses 0 as well)
+    for t_s, value in sorted(steps, key=lambda s: s[0]):
+        if float(value) != prev and 0.0 < float(t_s) < duration_s:
+            out.add(float(t_s))
+        prev = float(value)
+    return out
+
+
+def steady_windows(model: Model, window_s: float = 0.2) -> list[tuple[float, float]]:
+    """The last ``window_s`` of each constant-reference segment, as (t0, t1) in s.
+
+    Segments are split at every instant where the speed reference or the load
+    changes (plant-and-metrics.md "Metrics": default window is the last 0.2 s
+    of each constant-reference segment).  A segment shorter than ``window_s``
+    gives its whole length.  For the seed-001 SPMSM scenario (speed step at
+    2 s, load steps at 1 s and 3 s, 4 s total):
+    [(0.8, 1.0), (1.8, 2.0), (2.8, 3.0), (3.8, 4.0)].
+    """
+    if window_s <= 0:
+        raise ValueError("window_s must be > 0")
+    sc = model.scenario
+    cuts = _change_times(sc.speed_ref_rpm, sc.duration_s) | _change_times(sc.load_nm, sc.duration_s)
+    bounds = [0.0, *sorted(cuts), float(sc.duration_s)]
+    return [(max(a, b - window_s), b) for a, b in zip(bounds[:-1], bounds[1:])]
+
+
+def window_slice(dt_s: float, t0: float, t1: float, n: int | None = None) -> slice:
+    """Samples k with t0 <= k*dt_s < t1 (grid-tolerant), clipped to n samples."""
+    k0 = max(0, math.ceil(t0 / dt_s - _TOL))
+    k1 = max(k0, math.ceil(t1 / dt_s - _TOL))
+    if n is not None:
+        k0, k1 = min(k0, n), min(k1, n)
+    return slice(k0, k1)
+
+
+def window_mask(n: int, dt_s: float, windows: list[tuple[float, float]] | tuple[float, float]) -> np.ndarray:
+    """Boolean mask of the samples inside one window (t0, t1) or a list of windows."""
+    if isinstance(windows, tuple) and len(windows) == 2 and not isinstance(windows[0], tuple):
+        windows = [windows]  # type: ignore[list-item]
+    mask = np.zeros(n, dtype=bool)
+    for t0, t1 in windows:  # type: ignore[misc]
+        mask[window_slice(dt_s, t0, t1, n)] = True
+    return mask
+
+
+# ---------------------------------------------------------------------------
+# ripple: seed eq. (7)-(8)
+# ---------------------------------------------------------------------------
+def _error(x: Any, ref: Any, mask: Any) -> np.ndarray:
+    e = np.asarray(x, dtype=np.float64) - np.asarray(ref, dtype=np.float64)
+    e = np.broadcast_to(e, np.shape(x))
+    if mask is not None:
+        e = e[np.asarray(mask)]
+    return e
+
+
+def rmse(x: Any, ref: Any, mask: Any = None) -> float:
+    """sqrt(mean((x - ref)^2)) over the masked samples (seed 001 eq. (7)-(8)).
+
+    ``ref`` is an array like ``x`` or a scalar (psi* is constant); ``mask`` a
+    boolean array or index (None: all samples).  NaN for an empty selection.
+    """
+    e = _error(x, ref, mask)
+    return float(np.sqrt(np.mean(e * e))) if e.size else math.nan
+
+
+def ripple_stats(x: Any, ref: Any, mask: Any = None) -> dict[str, float]:
+    """Ripple of x about ref over the masked samples.
+
+    Returns ``rmse`` (seed eq. (7)-(8)), ``std`` (standard deviation of the
+    error x - ref, i.e. the ripple about its mean offset), ``pp``
+    (peak-to-peak of the error) and ``mean`` (mean error), all NaN if empty.
+    """
+    e = _error(x, ref, mask)
+    if not e.size:
+        return {"rmse": math.nan, "std": math.nan, "pp": math.nan, "mean": math.nan}
+    return {
+        "rmse": float(np.sqrt(np.mean(e * e))),
+        "std": float(np.std(e)),
+        "pp": float(np.ptp(e)),
+        "mean": float(np.mean(e)),
+    }
+
+
+# ---------------------------------------------------------------------------
+# spectrum and THD
+# ---------------------------------------------------------------------------
+def amplitude_spectrum(
+    signal: Any, dt_s: float, t0: float, t1: float, f1_hz: float
+) -> tuple[np.ndarray, np.ndarray, dict[str, Any]]:
+    """Single-sided amplitude spectrum over an integer number of fundamental periods.
+
+    Takes the longest whole number of periods 1/f1_hz that fits in the samples
+    of [t0, t1) (starting at t0), M = round(n_periods/(f1*dt)) samples, so the
+    fundamental falls on FFT bin n_periods and harmonic h on bin
+    h*n_periods (exactly when 1/(f1*dt) is an integer; otherwise the FFT's
+    own fundamental n_periods/(M*dt) is used and reported as ``f1_used_hz``).
+    Returns (frequencies Hz, peak amplitudes, info).  Raises ValueError when
+    not even one period fits.
+    """
+    x = np.asarray(signal, dtype=np.float64)
+    if not (f1_hz > 0 and math.isfinite(f1_hz)):
+        raise ValueError(f"fundamental frequency must be positive, got {f1_hz!r}")
+    sl = window_slice(dt_s, t0, t1, x.shape[0])
+    avail = sl.stop - sl.start
+    per_period = 1.0 / (f1_hz * dt_s)  # samples per fundamental period
+    n_per = int(math.floor(avail / per_period + _TOL))
+    if n_per < 1:
+        raise ValueError(
+            f"window [{t0}, {t1}) s holds {avail} samples, less than one fundamental "
+            f"period ({per_period:.1f} samples at {f1_hz:.4g} Hz)"
+        )
+    m = min(avail, int(round(n_per * per_period)))
+    seg = x[sl.start : sl.start + m]
+    spec = np.fft.rfft(seg)
+    amp = np.abs(spec) * (2.0 / m)
+    amp[0] *= 0.5  # DC
+    if m % 2 == 0:
+        amp[-1] *= 0.5  # Nyquist bin
+    freqs = np.fft.rfftfreq(m, dt_s)
+    info = {
+        "t0_s": sl.start * dt_s,
+        "t1_s": (sl.start + m) * dt_s,
+        "n_samples": m,
+        "n_periods": n_per,
+        "f1_hz": float(f1_hz),
+        "f1_used_hz": n_per / (m * dt_s),
+        "samples_per_period": per_period,
+    }
+    return freqs, amp, info
+
+
+def thd(
+    signal: Any, dt_s: float, t0: float, t1: float, f1_hz: float, f_max_hz: float = 10e3
+) -> tuple[float, dict[str, Any]]:
+    """Total harmonic distortion in percent: 100*sqrt(sum_{h>=2} I_h^2)/I_1.
+
+    FFT over an integer number of fundamental periods inside [t0, t1)
+    (:func:`amplitude_spectrum`), harmonics h = 2 .. h_max with h_max*f1 <=
+    min(f_max_hz, fs/2) (plant-and-metrics.md "THD of i_a").  Only integer
+    harmonics enter the sum.  The info dict gives the window actually used,
+    the number of periods, f1, the harmonic range and the fundamental's
+    amplitude.
+    """
+    freqs, amp, info = amplitude_spectrum(signal, dt_s, t0, t1, f1_hz)
+    n_per = info["n_periods"]
+    nbins = amp.shape[0]
+    f_lim = min(f_max_hz, 0.5 / dt_s)
+    h_max = int(math.floor(f_lim / info["f1_used_hz"] + _TOL))
+    h_max = min(h_max, (nbins - 1) // n_per)
+    i1 = float(amp[n_per])
+    harm = amp[n_per * np.arange(2, h_max + 1)] if h_max >= 2 else np.zeros(0)
+    value = 100.0 * float(np.sqrt(np.sum(harm * harm))) / i1 if i1 > 0 else math.nan
+    info.update(
+        {
+            "harmonics": [2, h_max],
+            "f_max_hz": h_max * info["f1_used_hz"],
+            "f_limit_hz": f_lim,
+            "i1_peak": i1,
+        }
+    )
+    return value, info
+
+
+# ---------------------------------------------------------------------------
+# switching frequency and computation: seed eq. (9)-(10)
+# ---------------------------------------------------------------------------
+def leg_commutations(sw: Any, sw_initial: int = 0) -> int:
+    """Total number of leg state changes in a sequence of states Sa*4+Sb*2+Sc.
+
+    The state before the first entry is ``sw_initial`` (000 at start-up).
+    """
+    s = np.concatenate(([int(sw_initial)], np.asarray(sw, dtype=np.int64).ravel()))
+    x = (s[1:] ^ s[:-1]) & 7
+    return int(np.sum((x & 1) + ((x >> 1) & 1) + ((x >> 2) & 1)))
+
+
+def f_ave_hz(sw: Any, duration_s: float, sw_initial: int = 0) -> float:
+    """Average switching frequency, seed 001 eq. (9): N_switching / (6 t).
+
+    N_switching counts on/off changes of all six switches; one leg change is
+    two switch changes (upper and lower), hence f_ave = leg changes /
+    (3 * duration_s): leg commutations per second per leg.
+    """
+    return leg_commutations(sw, sw_initial) / (3.0 * duration_s)
+
+
+def cal_ave(n_eval: Any) -> float:
+    """Average number of evaluated candidates per sample, seed 001 eq. (10): Cal / n."""
+    a = np.asarray(n_eval, dtype=np.float64)
+    return float(np.mean(a)) if a.size else math.nan
+
+
+# ---------------------------------------------------------------------------
+# all two-level metrics of one run
+# ---------------------------------------------------------------------------
+def thd_window(trace: "Trace", model: Model, window_s: float = 0.2) -> tuple[float, float] | None:
+    """The last steady window whose speed reference is nonzero (None if there is none)."""
+    for t0, t1 in reversed(steady_windows(model, window_s)):
+        sl = window_slice(trace.dt_s, t0, t1, trace.n)
+        if sl.stop > sl.start and np.all(trace.speed_ref_rad_s[sl] != 0.0):
+            return (t0, t1)
+    return None
+
+
+def _f1_hz(trace: "Trace", model: Model, t0: float, t1: float) -> float:
+    """Fundamental of the phase currents: mean |omega_e| over the window / (2*pi)."""
+    sl = window_slice(trace.dt_s, t0, t1, trace.n)
+    w_e = model.motor.pole_pairs * float(np.mean(np.abs(trace.omega_m_rad_s[sl])))
+    return w_e / (2.0 * math.pi)
+
+
+def two_level_metrics(
+    trace: "Trace",
+    model: Model,
+    stats_window: tuple[float, float] | None = None,
+    window_s: float = 0.2,
+    f_max_hz: float = 10e3,
+) -> dict[str, Any]:
+    """The seed-001 metric set of one closed-loop run (JSON-ready values).
+
+    Windows (stated in the result under ``window``):
+
+    * ``T_rip_RMSE``, ``psi_rip_RMSE`` (eq. (7)-(8)), ``f_ave_hz`` (eq. (9))
+      and ``Cal_ave`` (eq. (10)): over the whole run, as the seed's Tables 2
+      and 9 do (n = all samples, t = the simulated time), or over
+      ``stats_window`` = (t0, t1) when given.
+    * ``T_rip_std``, ``T_rip_pp``, ``psi_rip_std``, ``psi_rip_pp``: ripple of
+      the error about its mean, over the steady windows (the last
+      ``window_s`` of each constant-reference segment, :func:`steady_windows`),
+      so that start-up and reversal transients do not dominate them; or over
+      ``stats_window`` when given.
+    * ``THD_ia`` (percent): over the last steady window with a nonzero speed
+      reference (:func:`thd_window`), f1 from the mean electrical speed there,
+      harmonics up to ``f_max_hz``; NaN (with the reason) if there is none.
+
+    ``steady`` lists the ripple statistics of each steady window.
+    """
+    dt, n = trace.dt_s, trace.n
+    psi_ref = float(model.controller.psi_ref_wb)
+    windows = steady_windows(model, window_s)
+
+    if stats_window is None:
+        run_mask = None
+        run_desc = {
+            "t0_s": 0.0,
+            "t1_s": n * dt,
+            "n_samples": n,
+            "description": "whole run, as seed 001 eq. (7)-(10) (n = all samples, t = simulated time)",
+        }
+        rip_mask = window_mask(n, dt, windows)
+        rip_desc = {
+            "windows_s": [[a, b] for a, b in windows],
+            "n_samples": int(np.count_nonzero(rip_mask)),
+            "description": f"steady windows: last {window_s:g} s of each constant-reference segment",
+        }
+        sw_run, n_eval_run, t_run, sw0 = trace.sw_applied, trace.n_eval, n * dt, 0
+    else:
+        sl = window_slice(dt, stats_window[0], stats_window[1], n)
+        run_mask = np.zeros(n, dtype=bool)
+        run_mask[sl] = True
+        run_desc = {
+            "t0_s": sl.start * dt,
+            "t1_s": sl.stop * dt,
+            "n_samples": sl.stop - sl.start,
+            "description": "window given by the caller",
+        }
+        rip_mask = run_mask
+        rip_desc = dict(run_desc)
+        sw_run, n_eval_run, t_run = trace.sw_applied[sl], trace.n_eval[sl], (sl.stop - sl.start) * dt
+        sw0 = int(trace.sw_applied[sl.start - 1]) if sl.start > 0 else 0
+
+    t_stats = ripple_stats(trace.te_nm, trace.torque_ref_nm, rip_mask)
+    p_stats = ripple_stats(trace.psi_wb, psi_ref, rip_mask)
+
+    thd_value = math.nan
+    thd_info: dict[str, Any]
+    tw = thd_window(trace, model, window_s)
+    if tw is None:
+        thd_info = {"description": "no steady window with a nonzero speed reference"}
+    else:
+        try:
+            thd_value, thd_info = thd(trace.ia_a, dt, tw[0], tw[1], _f1_hz(trace, model, *tw), f_max_hz)
+            thd_info["description"] = (
+                f"i_a over the last steady window with nonzero speed [{tw[0]:g}, {tw[1]:g}) s, "
+                f"{thd_info['n_periods']} fundamental periods, harmonics "
+                f"{thd_info['harmonics'][0]}..{thd_info['harmonics'][1]}"
+            )
+        except ValueError as exc:
+            thd_info = {"description": f"THD not computed: {exc}", "window_s": list(tw)}
+
+    steady = []
+    for a, b in windows:
+        m = window_mask(n, dt, (a, b))
+        ts = ripple_stats(trace.te_nm, trace.torque_ref_nm, m)
+        ps = ripple_stats(trace.psi_wb, psi_ref, m)
+        steady.append(
+            {
+                "t0_s": a,
+                "t1_s": b,
+                "T_rip_RMSE": ts["rmse"],
+                "T_rip_std": ts["std"],
+                "T_rip_pp": ts["pp"],
+                "psi_rip_RMSE": ps["rmse"],
+                "psi_rip_std": ps["std"],
+                "psi_rip_pp": ps["pp"],
+            }
+        )
+
+    return {
+        "T_rip_RMSE": rmse(trace.te_nm, trace.torque_ref_nm, run_mask),
+        "psi_rip_RMSE": rmse(trace.psi_wb, psi_ref, run_mask),
+        "T_rip_std": t_stats["std"],
+        "T_rip_pp": t_stats["pp"],
+        "psi_rip_std": p_stats["std"],
+        "psi_rip_pp": p_stats["pp"],
+        "THD_ia": thd_value,
+        "f_ave_hz": f_ave_hz(sw_run, t_run, sw0),
+        "Cal_ave": cal_ave(n_eval_run),
+        "window": {
+            "T_rip_RMSE": run_desc,
+            "psi_rip_RMSE": run_desc,
+            "f_ave_hz": {**run_desc, "definition": "leg state changes / (3 legs * t), = N_switching/(6 t) of seed eq. (9)"},
+            "Cal_ave": run_desc,
+            "ripple_std_pp": rip_desc,
+            "THD_ia": thd_info,
+        },
+        "steady": steady,
+    }
