@@ -107,25 +107,15 @@ def build_host_library(model: Model, t: TwoLevelTables, with_sim: bool = True) -
     bdir = cache_root() / modname
     so = _find_module(bdir, modname)
     if so is None:
-        bdir.mkdir(parents=True, exist_ok=True)
-        write_files(files, bdir)
-        objs = []
-        sources = [bdir / f"{model.prefix}_mpc.c"]
-        if with_sim:
-            sources += [fw / s for s in SIM_SOURCES]
-        for src in sources:
-            obj = bdir / (src.stem + ".o")
-            compile_object(src, obj, [bdir, fw / "runtime"])
-            objs.append(str(obj))
-        ffi = cffi.FFI()
-        ffi.cdef(cdef + "\n" + sim_api)
-        includes = '#include "mpc_binding.h"\n' + ('#include "sim2l_api.h"\n' if with_sim else "")
-        ffi.set_source(modname, includes, include_dirs=[str(bdir), str(fw / "runtime")],
-                       extra_objects=objs, libraries=["m"])
+        # build in a private directory, then rename: parallel test workers may race
+        tmp = bdir.with_name(f"{modname}.tmp{os.getpid()}")
+        shutil.rmtree(tmp, ignore_errors=True)
+        tmp.mkdir(parents=True)
+        _compile_module(modname, tmp, files, cdef, sim_api, with_sim, model.prefix)
         try:
-            ffi.compile(tmpdir=str(bdir), verbose=False)
-        except Exception as exc:  # cffi raises distutils/setuptools errors
-            raise BuildError(f"linking the cffi module {modname} failed: {exc}") from exc
+            os.replace(tmp, bdir)
+        except OSError:  # another process finished first: use its build
+            shutil.rmtree(tmp, ignore_errors=True)
         so = _find_module(bdir, modname)
         if so is None:
             raise BuildError(f"cffi produced no module in {bdir}")
@@ -133,6 +123,29 @@ def build_host_library(model: Model, t: TwoLevelTables, with_sim: bool = True) -
     lib = HostLib(mod.ffi, mod.lib, bdir, model.prefix, with_sim)
     _check_layout(lib)
     return lib
+
+
+def _compile_module(modname: str, bdir: Path, files: dict[str, str], cdef: str, sim_api: str,
+                    with_sim: bool, prefix: str) -> None:
+    fw = firmware_dir()
+    write_files(files, bdir)
+    objs = []
+    sources = [bdir / f"{prefix}_mpc.c"]
+    if with_sim:
+        sources += [fw / s for s in SIM_SOURCES]
+    for src in sources:
+        obj = bdir / (src.stem + ".o")
+        compile_object(src, obj, [bdir, fw / "runtime"])
+        objs.append(str(obj))
+    ffi = cffi.FFI()
+    ffi.cdef(cdef + "\n" + sim_api)
+    includes = '#include "mpc_binding.h"\n' + ('#include "sim2l_api.h"\n' if with_sim else "")
+    ffi.set_source(modname, includes, include_dirs=[str(bdir), str(fw / "runtime")],
+                   extra_objects=objs, libraries=["m"])
+    try:
+        ffi.compile(tmpdir=str(bdir), verbose=False)
+    except Exception as exc:  # cffi raises distutils/setuptools errors
+        raise BuildError(f"linking the cffi module {modname} failed: {exc}") from exc
 
 
 def _find_module(bdir: Path, modname: str) -> Path | None:

@@ -1,0 +1,97 @@
+"""``mpcgen bench``: execution cost per step, every strategy side by side.
+
+Host: every strategy's compiled step runs over the same recorded trajectory
+(the conventional controller's closed-loop run of the config's scenario,
+80 000 samples for the SPMSM, as seed-001 section 7 does), in one process,
+interleaved, best of ``repeats``; reported as ns per step and the ratio to
+the first strategy (conventional / mpdtc27).  Absolute nanoseconds on a
+shared machine are noise; the ratios are the figure to compare with the
+seed's Table 11.  Also: closed-loop simulation throughput in periods/s.
+
+Emulated (``--emulated``): instructions per step on the emulated Cortex-M7
+(codegen.emulate), reported as instructions -- not cycles.
+"""
+from __future__ import annotations
+
+import time
+from typing import Callable
+
+import numpy as np
+
+from . import __version__
+from .hostbuild import build_host_library
+from .model import Model
+from .twolevel.switch_tables import tables_for
+
+
+def recorded_trajectory(model: Model, log: Callable[[str], None]) -> tuple[np.ndarray, float, int]:
+    """Controller inputs of the baseline's closed-loop run, its wall time and period count."""
+    from .simulate import controller_inputs, run_closed_loop
+
+    base = model.with_controller(strategy="conventional")
+    lib = build_host_library(base, tables_for(base), with_sim=True)
+    t0 = time.perf_counter()
+    trace = run_closed_loop(lib.ffi, lib.lib, base, progress=lambda f: log(f"  recording trajectory {f:5.0%}"))
+    wall = time.perf_counter() - t0
+    return controller_inputs(trace, base), wall, len(trace.t_s)
+
+
+def host_ns_per_step(libs: dict, states: np.ndarray, repeats: int) -> dict[str, float]:
+    """Best-of-``repeats`` ns per step, strategies interleaved in each round."""
+    best = {s: float("inf") for s in libs}
+    for _ in range(max(1, repeats)):
+        for s, lib in libs.items():
+            t0 = time.perf_counter_ns()
+            lib.step_batch(states)
+            dt = time.perf_counter_ns() - t0
+            best[s] = min(best[s], dt / len(states))
+    return best
+
+
+def bench(model: Model, strategies: list[str], emulated: bool = False, repeats: int = 5,
+          log: Callable[[str], None] = print) -> dict:
+    """Run the benchmark; returns the JSON-able result with a printable ``_table``."""
+    states, sim_wall, n_periods = recorded_trajectory(model, log)
+    libs = {}
+    for s in strategies:
+        variant = model.with_controller(strategy=s)
+        libs[s] = build_host_library(variant, tables_for(variant), with_sim=False)
+    log(f"timing {len(strategies)} strategies over {len(states)} recorded states, best of {repeats}")
+    ns = host_ns_per_step(libs, states, repeats)
+    base = strategies[0]
+    result: dict = {
+        "config": model.name, "config_hash": model.config_hash(), "version": __version__,
+        "trajectory_states": int(len(states)),
+        "sim_periods_per_s": n_periods / sim_wall if sim_wall > 0 else 0.0,
+        "baseline": base,
+        "strategies": {},
+    }
+    rows = [f"{'strategy':12s} {'host ns/step':>13s} {'ratio':>7s}" + ("  M7 instr/step (min/median/max)   ratio" if emulated else "")]
+    m7 = {}
+    if emulated:
+        from .emulate import emulated_instructions
+
+        m7 = emulated_instructions(model, strategies, states, log=log)
+    for s in strategies:
+        entry = {"host_ns_per_step": ns[s], "ratio_to_conventional": ns[s] / ns[base]}
+        line = f"{s:12s} {ns[s]:13.1f} {ns[s] / ns[base]:7.3f}"
+        if emulated:
+            st = m7[s]
+            entry.update({
+                "m7_instructions_per_step": st["median"], "m7_instructions_min": st["min"],
+                "m7_instructions_max": st["max"], "m7_ratio_to_conventional": st["median"] / m7[base]["median"],
+            })
+            line += f"  {st['min']:6.0f} / {st['median']:6.0f} / {st['max']:6.0f}   {st['median'] / m7[base]['median']:6.3f}"
+        result["strategies"][s] = entry
+        rows.append(line)
+    rows.append(f"closed-loop simulation ({model.name}, conventional): {result['sim_periods_per_s']:,.0f} periods/s")
+    if emulated:
+        rows.append("M7 figures are instruction counts on the emulated Cortex-M7 (QEMU -icount), not cycles.")
+        if len(strategies) and "ratio_to_conventional" in result["strategies"][base]:
+            for s in strategies:
+                result["strategies"][s]["ratio_to_conventional"] = result["strategies"][s]["m7_ratio_to_conventional"]
+            result["host_ratio_note"] = "with --emulated, ratio_to_conventional is the M7 instruction ratio; host_ns_ratio holds the host one"
+            for s in strategies:
+                result["strategies"][s]["host_ns_ratio"] = ns[s] / ns[base]
+    result["_table"] = "\n".join(rows)
+    return result
