@@ -158,7 +158,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
 # ---------------------------------------------------------------- firmware
 def cmd_firmware(args: argparse.Namespace) -> int:
-    from .firmware import write_firmware_project
+    from .fwproject import write_firmware_project
     from .twolevel.switch_tables import tables_for
 
     model = _load(args)

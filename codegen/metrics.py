@@ -50,6 +50,11 @@ __all__ = [
 _TOL = 1e-6
 
 
+def _t(k: int, dt_s: float) -> float:
+    """Time of sample k for reports (k*dt_s without float noise: 3.8, not 3.8000000000000003)."""
+    return round(k * dt_s, 12)
+
+
 # ---------------------------------------------------------------------------
 # windows
 # ---------------------------------------------------------------------------
@@ -177,8 +182,8 @@ def amplitude_spectrum(
         amp[-1] *= 0.5  # Nyquist bin
     freqs = np.fft.rfftfreq(m, dt_s)
     info = {
-        "t0_s": sl.start * dt_s,
-        "t1_s": (sl.start + m) * dt_s,
+        "t0_s": _t(sl.start, dt_s),
+        "t1_s": _t(sl.start + m, dt_s),
         "n_samples": m,
         "n_periods": n_per,
         "f1_hz": float(f1_hz),
@@ -302,7 +307,7 @@ def two_level_metrics(
         run_mask = None
         run_desc = {
             "t0_s": 0.0,
-            "t1_s": n * dt,
+            "t1_s": _t(n, dt),
             "n_samples": n,
             "description": "whole run, as seed 001 eq. (7)-(10) (n = all samples, t = simulated time)",
         }
@@ -318,8 +323,8 @@ def two_level_metrics(
         run_mask = np.zeros(n, dtype=bool)
         run_mask[sl] = True
         run_desc = {
-            "t0_s": sl.start * dt,
-            "t1_s": sl.stop * dt,
+            "t0_s": _t(sl.start, dt),
+            "t1_s": _t(sl.stop, dt),
             "n_samples": sl.stop - sl.start,
             "description": "window given by the caller",
         }

@@ -87,15 +87,14 @@ def plot_two_level(trace: "Trace", model: Model, strategy: str, outdir: str | Pa
     # phase currents: whole run + zoom on two fundamental periods of the THD window
     tw = thd_window(trace, model)
     fig, axes = _new_figure(2, height=7.0)
-    for ax, (lo, hi), label in ((axes[0], (0, trace.n), "whole run"), (axes[1], None, "zoom")):
-        if hi is None:
-            if tw is not None:
-                f1 = _f1(trace, model, *tw)
-                span = 2.0 / f1 if f1 > 0 else tw[1] - tw[0]
-                sl = window_slice(trace.dt_s, max(tw[0], tw[1] - span), tw[1], trace.n)
-            else:
-                sl = slice(max(0, trace.n - int(0.05 / trace.dt_s)), trace.n)
-            lo, hi = sl.start, sl.stop
+    if tw is not None:
+        f1 = _f1(trace, model, *tw)
+        span = 2.0 / f1 if f1 > 0 else tw[1] - tw[0]
+        zoom = window_slice(trace.dt_s, max(tw[0], tw[1] - span), tw[1], trace.n)
+    else:
+        zoom = slice(max(0, trace.n - int(round(0.05 / trace.dt_s))), trace.n)
+    for ax, sl, label in ((axes[0], slice(0, trace.n), "whole run"), (axes[1], zoom, "zoom")):
+        lo, hi = sl.start, sl.stop
         ax.plot(t[lo:hi], trace.ia_a[lo:hi], lw=0.5, label="i_a")
         ax.plot(t[lo:hi], trace.ib_a[lo:hi], lw=0.5, label="i_b")
         ax.plot(t[lo:hi], trace.ic_a[lo:hi], lw=0.5, label="i_c")

@@ -2,8 +2,10 @@
 
 The repository keeps them at the top level (``templates/``, ``firmware/``);
 the installed package ships them as ``codegen.templates`` and
-``codegen.firmware`` (pyproject.toml package-dir).  Both are found through
-importlib.resources, so the installed package works outside the repository.
+``codegen.firmware`` (pyproject.toml package-dir), i.e. as the directories
+codegen/templates/ and codegen/firmware/ of the installed ``codegen``
+package.  Both are found through importlib.resources, so the installed
+package works outside the repository.
 """
 from __future__ import annotations
 
@@ -12,11 +14,19 @@ from pathlib import Path
 
 
 def _package_dir(package: str, fallback: str) -> Path:
+    """The data directory shipped as ``package`` (installed) or ``<repo>/<fallback>`` (checkout).
+
+    The directory is looked up inside the ``codegen`` package rather than by
+    importing ``package``: ``codegen.firmware`` is also the name of the module
+    codegen/firmware.py (firmware projects), which wins over the data
+    directory on import.
+    """
+    sub = package.rsplit(".", 1)[-1]
     try:
-        path = Path(str(importlib.resources.files(package)))
+        path = Path(str(importlib.resources.files("codegen"))) / sub
         if path.is_dir():
             return path
-    except ModuleNotFoundError:
+    except (ModuleNotFoundError, TypeError):
         pass
     # running from a checkout without installing: <repo>/<fallback>
     here = Path(__file__).resolve().parent.parent / fallback

@@ -1,0 +1,71 @@
+/*
+ * selftest.h -- replay embedded controller input states, compare every
+ * output value bit for bit with the embedded expected outputs of the Python
+ * reference (codegen/twolevel/reference.py), time every step, and report
+ * over the console.
+ *
+ * The generated mpc_values.h gives the value counts and the data's config
+ * hash; the generated mpc_values.c flattens records into uint32_t values
+ * (a float as its bits, a uint16_t as its value) in interface order; the
+ * generated mpc_selftest_data.c holds the test sets.
+ *
+ * Console lines (one per line, fields " key=value"):
+ *   SET      name n expect              start of a set
+ *   MISMATCH set i field got exp         one differing value (first states only)
+ *   STATE    set i <input fields>        the input of a mismatching state (bits)
+ *   CYC      v v v ...                   net cycles of each step (dump sets only)
+ *   SUMMARY  set n mismatches crc_in crc_out cyc_min cyc_max cyc_mean overhead unit
+ * crc_in / crc_out: CRC-32 (zlib) of every input / output value of the set in
+ * order, floats as 4 and uint16_t as 2 little-endian octets; the host
+ * recomputes crc_out from the reference, so an image that only claimed
+ * success could not pass.
+ */
+#ifndef MPC_SELFTEST_H
+#define MPC_SELFTEST_H
+
+#include <stdint.h>
+
+#include "mpc_binding.h"
+#include "mpc_values.h"
+
+/* Kind of a flattened value. */
+#define MPC_VALUE_F32 1u
+#define MPC_VALUE_U16 2u
+
+/* Mismatching states reported in detail per set (all are counted). */
+#ifndef MPC_SELFTEST_MAX_DETAILS
+#define MPC_SELFTEST_MAX_DETAILS 8u
+#endif
+
+typedef struct {
+    const char *name;   /* field name, "costs[3]" for array elements */
+    uint16_t kind;      /* MPC_VALUE_F32 or MPC_VALUE_U16 */
+} mpc_value_desc_t;
+
+extern const mpc_value_desc_t mpc_input_desc[MPC_INPUT_NVALUES];
+extern const mpc_value_desc_t mpc_output_desc[MPC_OUTPUT_NVALUES];
+
+/* Flatten one record into values (generated: mpc_values.c). */
+void mpc_input_values(const mpc_input_t *in, uint32_t values[MPC_INPUT_NVALUES]);
+void mpc_output_values(const mpc_output_t *out, uint32_t values[MPC_OUTPUT_NVALUES]);
+
+typedef struct {
+    const char *name;             /* "selftest", "bench" */
+    const mpc_input_t *states;    /* n input states */
+    const mpc_output_t *expected; /* n expected outputs, or NULL (compact) */
+    const uint32_t *expected_crc; /* compact: CRC-32 of each state's output values */
+    uint32_t n;
+    uint16_t dump_cycles;         /* nonzero: print every step's net cycles (CYC lines) */
+} mpc_testset_t;
+
+/* The embedded sets (generated: mpc_selftest_data.c). */
+extern const mpc_testset_t mpc_testsets[MPC_N_TESTSETS];
+
+/* Run one set; return its number of mismatching states.  `overhead` is the
+ * empty-call measurement subtracted from every step's cycles. */
+uint32_t mpc_selftest_run(const mpc_testset_t *set, uint32_t overhead);
+
+/* CRC-32 of `n` flattened values continued from `crc` (see the header comment). */
+uint32_t mpc_values_crc(uint32_t crc, const uint32_t *values, const mpc_value_desc_t *desc, uint16_t n);
+
+#endif /* MPC_SELFTEST_H */

@@ -1,0 +1,47 @@
+"""Fixtures of the simulator tests: the stub-controller build and the SPMSM model.
+
+The model is built straight from examples/seed001_spmsm.toml with tomllib
+(these tests exercise the simulator, not the config loader).
+"""
+from __future__ import annotations
+
+import tomllib
+from pathlib import Path
+
+import pytest
+
+from codegen.model import Controller, Derivation, Inverter, Model, Motor, Scenario, SpeedLoop
+from tests.fixtures.stubbuild import build_stub_library
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def model_from_toml(path: Path) -> Model:
+    d = tomllib.loads(path.read_text())
+    ctrl = dict(d["controller"])
+    deriv = Derivation(**ctrl.pop("derivation", {}))
+    scen = dict(d["scenario"])
+    scen["speed_ref_rpm"] = tuple(tuple(map(float, s)) for s in scen["speed_ref_rpm"])
+    scen["load_nm"] = tuple(tuple(map(float, s)) for s in scen["load_nm"])
+    return Model(
+        name=d["meta"]["name"],
+        prefix=d["meta"]["prefix"],
+        source=str(path),
+        motor=Motor(**d["motor"]),
+        inverter=Inverter(**d["inverter"]),
+        controller=Controller(derivation=deriv, **ctrl),
+        speed_loop=SpeedLoop(**d["speed_loop"]),
+        scenario=Scenario(**scen),
+        target=d["target"]["name"],
+    )
+
+
+@pytest.fixture(scope="session")
+def spmsm_model() -> Model:
+    return model_from_toml(ROOT / "examples" / "seed001_spmsm.toml")
+
+
+@pytest.fixture(scope="session")
+def stub_lib(tmp_path_factory):
+    """(ffi, lib): plant2l + sim2l + stub controller, strict flags, cffi ABI mode."""
+    return build_stub_library(tmp_path_factory.mktemp("stub_build"))
