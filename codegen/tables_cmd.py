@@ -69,6 +69,13 @@ def two_level_tables_text(model: Model, source: str, log: Callable[[str], None])
     parts += [f"Utilisation from the training run ({n2} samples with |dT| > eps_T = {model.controller.eps_t_nm} N*m):", ""]
     parts += _utilisation_block(utilisation_percent(counts["s2"]), _S2_TITLES)
     parts += _utilisation_block(utilisation_percent(counts["s3"]), _S3_TITLES)
+    from .twolevel.switch_tables import MIN_CELL_SAMPLES, thin_cells
+
+    for k in ("s2", "s3"):
+        thin = np.argwhere(thin_cells(counts[k]))
+        if len(thin):
+            cells = ", ".join(f"condition {c + 1} sector {s + 1}" for c, s in thin)
+            parts += [f"{k}: {len(thin)} cells have < {MIN_CELL_SAMPLES} active choices and take the seed-derived set: {cells}", ""]
     parts += [f"s2 derived (coverage {d.coverage:.2f}, max_active {d.max_active}):", format_switch_table(s2, "s2"), ""]
     parts += ["s2 vs the seed's published table:", format_comparison(compare_tables(s2, pub.PUBLISHED_S2), "s2"), ""]
     parts += ["s3 derived:", format_switch_table(s3, "s3"), ""]

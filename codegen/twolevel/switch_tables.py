@@ -8,8 +8,11 @@ row plus rows derived by the rule from the seed's own utilisation Tables 6-8
 utilisation"): run the conventional controller closed loop over the config's
 own scenario (the compiled C step, proven equal to the reference), count per
 condition and sector how often each vector was chosen over the samples with
-|dT| > eps_T, and apply the coverage rule.  Cells without data fall back to
-the published-derived table.  The result is cached per config hash.
+|dT| > eps_T, and apply the coverage rule.  A cell with fewer than
+``MIN_CELL_SAMPLES`` active-vector choices is too thin to trust (a well-tuned
+conventional controller rarely leaves the eps_T band in some cells; the
+IPMSM run is an example) and takes the published-derived cell instead; the
+``tables`` command reports which cells did.  Counts are cached per config.
 """
 from __future__ import annotations
 
@@ -23,6 +26,15 @@ from ..model import Model
 from .derive import SwitchTable, TwoLevelTables, derive_two_level
 from .reference import _K, sector12, step_batch
 from .utilisation import count_utilisation, derive_table, published_tables
+
+
+#: Fewest active-vector choices in a cell for its derived set to be used.
+MIN_CELL_SAMPLES = 100
+
+
+def thin_cells(counts: np.ndarray) -> np.ndarray:
+    """Mask (conditions, sectors) of cells with too few active-vector choices."""
+    return counts[..., 1:].sum(axis=-1) < MIN_CELL_SAMPLES
 
 
 def training_model(model: Model) -> Model:
@@ -73,8 +85,9 @@ def derived_tables(model: Model, progress: Callable[[float], None] | None = None
         cache.write_text(json.dumps({k: v.tolist() for k, v in counts.items()}))
     d = model.controller.derivation
     pub2, pub3 = published_tables(d.coverage, d.max_active)
-    s2 = derive_table(counts["s2"], d.coverage, d.max_active, fallback=pub2)
-    s3 = derive_table(counts["s3"], d.coverage, d.max_active, fallback=pub3)
+    trusted = {k: np.where(thin_cells(v)[..., None], 0, v) for k, v in counts.items()}
+    s2 = derive_table(trusted["s2"], d.coverage, d.max_active, fallback=pub2)
+    s3 = derive_table(trusted["s3"], d.coverage, d.max_active, fallback=pub3)
     return s2, s3, counts
 
 

@@ -1,0 +1,36 @@
+"""`mpcgen bench`: host ns/step for every strategy side by side, sim throughput; emulated M7 counts."""
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from codegen.cli import main
+from conftest import SPMSM, TWO_LEVEL, require_tool
+
+
+def test_host_bench(tmp_path, capsys):
+    js = tmp_path / "bench.json"
+    assert main(["bench", str(SPMSM), "--json", str(js), "--repeats", "2", "-q"]) == 0
+    data = json.loads(js.read_text())
+    assert data["trajectory_states"] == 80_000
+    assert data["sim_periods_per_s"] > 0
+    for s in TWO_LEVEL:
+        e = data["strategies"][s]
+        assert e["host_ns_per_step"] > 0 and e["ratio_to_conventional"] > 0
+    assert data["strategies"]["conventional"]["ratio_to_conventional"] == 1.0
+    assert "host ns/step" in capsys.readouterr().out
+
+
+@pytest.mark.slow
+def test_emulated_bench(tmp_path):
+    require_tool("qemu-system-arm", "qemu-system-arm")
+    require_tool("arm-none-eabi-gcc", "gcc-arm-none-eabi")
+    js = tmp_path / "benchm7.json"
+    assert main(["bench", str(SPMSM), "--emulated", "--json", str(js), "--repeats", "1", "-q"]) == 0
+    data = json.loads(js.read_text())
+    for s in TWO_LEVEL:
+        e = data["strategies"][s]
+        assert e["m7_instructions_per_step"] > 50 and e["ratio_to_conventional"] > 0
+    # every simplified strategy holds the zero vector on most samples: cheaper median
+    assert data["strategies"]["s3"]["m7_instructions_per_step"] < data["strategies"]["conventional"]["m7_instructions_per_step"]
