@@ -158,10 +158,12 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
 # ---------------------------------------------------------------- firmware
 def cmd_firmware(args: argparse.Namespace) -> int:
-    from .fwproject import write_firmware_project
+    from .fwproject import BOARDS, write_firmware_project
     from .twolevel.switch_tables import tables_for
 
     model = _load(args)
+    if args.board not in BOARDS:
+        raise UsageError(f"--board = {args.board!r}: unknown board; allowed: {', '.join(BOARDS)}")
     paths = write_firmware_project(model, tables_for(model), args.board, Path(args.output))
     print(f"wrote {len(paths)} files to {args.output}; build with: make -C {args.output}")
     return EXIT_OK

@@ -134,7 +134,7 @@ def _constants(model: Model) -> list[Const]:
         Const("PSI_F_WB", f32(m.psi_f_wb), "Wb", "magnet flux"),
         Const("PSI_F_SQ", f32(m.psi_f_wb ** 2), "Wb^2", "psi_f^2 (MTPA psi*)"),
         Const("TE_PSI", f32(1.5 * m.pole_pairs * m.psi_f_wb), "N*m/A", "Te = 1.5 np psi_f i_q"),
-        Const("INV_TE_PSI", f32(1.0 / (1.5 * m.pole_pairs * m.psi_f_wb)), "A/(N*m)", "i_q* = T*/(1.5 np psi_f)"),
+        Const("INV_TE_PSI", f32(1.0 / (1.5 * m.pole_pairs * m.psi_f_wb)), "A/(N*m)", "i_q_ref = T_ref / (1.5 np psi_f)"),
         Const("RS_OHM", f32(m.rs_ohm), "ohm", "stator resistance"),
         Const("A_S", f32(ts / m.ld_h), "s/H", "Euler: i+ = i + Ts/Ls (u - Rs i +- rotation - w psi_f)"),
         Const("TS_S", f32(ts), "s", "control period Ts"),
