@@ -97,7 +97,7 @@ def cmd_generate(args: argparse.Namespace) -> int:
 
 # ---------------------------------------------------------------- verify
 def cmd_verify(args: argparse.Namespace) -> int:
-    from .verify import verify_strategy
+    from .verify import StrategyResult, verify_strategy
 
     model = _load(args)
     if args.states < 1:
@@ -107,7 +107,12 @@ def cmd_verify(args: argparse.Namespace) -> int:
     for s in _strategies(args, model):
         variant = model.with_controller(strategy=s)
         log(f"verify {model.name} / {s}: building and comparing {args.states} states")
-        r = verify_strategy(variant, args.states, log=log, closed_loop=not args.no_closed_loop)
+        if model.inverter.topology == "t-type":
+            from .threelevel.verify import verify_three_level
+
+            r = StrategyResult(**verify_three_level(variant, args.states, log=log, closed_loop=not args.no_closed_loop))
+        else:
+            r = verify_strategy(variant, args.states, log=log, closed_loop=not args.no_closed_loop)
         results.append(r)
         print(f"{s:12s} states {r.states:>9d}  mismatches {r.mismatches}  ({r.states_per_s:,.0f} states/s, "
               f"closed-loop {r.sources.get('closed_loop', 0)}, adversarial {r.sources['adversarial']}, "

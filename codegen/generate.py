@@ -73,10 +73,14 @@ def report_text(model: Model, t: TwoLevelTables, target: str) -> str:
 
 def generate(model: Model, outdir: Path, log: Callable[[str], None] = print) -> list[Path]:
     """Write the C files and the report for ``model.target`` into ``outdir``."""
-    if model.inverter.topology != "two-level":
-        from .errors import MpcgenError
+    if model.inverter.topology == "t-type":
+        from .threelevel.derive import derive_three_level
+        from .threelevel.render import render_three_level
 
-        raise MpcgenError(f"{model.source}: three-level generation is not available yet (strategy {model.controller.strategy})")
+        log(f"deriving the three-level tables for {model.name} ({model.controller.strategy})")
+        t3 = derive_three_level(model)
+        files = render_three_level(model, t3, model.target)
+        return write_files(files, outdir)
     log(f"deriving tables for {model.name} ({model.controller.strategy}, tables {model.controller.tables})")
     t = tables_for(model, progress=lambda f: log(f"  training run {f:5.0%}"))
     files = render_two_level(model, t, model.target)

@@ -43,6 +43,19 @@ class BuildError(MpcgenError):
 
 
 @dataclass(frozen=True)
+class Records:
+    """The step's input/output records: field lists and matching numpy dtypes."""
+
+    input_fields: tuple
+    output_fields: tuple
+    input_dtype: Any
+    output_dtype: Any
+
+
+TWO_LEVEL_RECORDS = Records(INPUT_FIELDS, OUTPUT_FIELDS, INPUT_DTYPE, OUTPUT_DTYPE)
+
+
+@dataclass(frozen=True)
 class HostLib:
     """A loaded host build: cffi ``ffi`` and ``lib`` plus where it was built."""
 
@@ -51,13 +64,14 @@ class HostLib:
     build_dir: Path
     prefix: str
     has_sim: bool
+    records: Records = TWO_LEVEL_RECORDS
 
     def step_batch(self, states: Any) -> Any:
-        """Run the compiled step over a numpy INPUT_DTYPE array; return OUTPUT_DTYPE."""
+        """Run the compiled step over an array of input records; return output records."""
         import numpy as np
 
-        states = np.ascontiguousarray(states, dtype=INPUT_DTYPE)
-        out = np.zeros(len(states), OUTPUT_DTYPE)
+        states = np.ascontiguousarray(states, dtype=self.records.input_dtype)
+        out = np.zeros(len(states), self.records.output_dtype)
         fn = getattr(self.lib, f"{self.prefix}_step_batch")
         pin = self.ffi.cast(f"{self.prefix}_input_t *", self.ffi.from_buffer(states))
         pout = self.ffi.cast(f"{self.prefix}_output_t *", self.ffi.from_buffer(out))
@@ -93,17 +107,27 @@ def _cdef(model: Model, t: TwoLevelTables) -> str:
 
 
 def build_host_library(model: Model, t: TwoLevelTables, with_sim: bool = True) -> HostLib:
-    """Render the host profile, compile strictly, link with cffi, load (cached)."""
+    """Two-level: render the host profile (+ the closed-loop simulator), build, load."""
     files = render_two_level(model, t, "host")
+    sim = (SIM_API, SIM_SOURCES, ("runtime/plant2l.h",)) if with_sim else None
+    return build_library(model.prefix, "_mpc", files, _cdef(model, t), TWO_LEVEL_RECORDS, sim)
+
+
+def build_library(prefix: str, tag: str, files: dict[str, str], cdef: str, records: Records,
+                  sim: tuple[str, tuple[str, ...], tuple[str, ...]] | None = None) -> HostLib:
+    """Compile the rendered step (+ optional runtime sources), link with cffi, load.
+
+    ``sim`` = (cdef-parsable API header, C sources, other headers), paths
+    relative to the firmware directory.  Cached by a hash of every input byte.
+    """
     fw = firmware_dir()
-    cdef = _cdef(model, t)
-    sim_api = (fw / SIM_API).read_text() if with_sim else ""
-    key_src = [cdef, sim_api, " ".join(STRICT_CFLAGS), cffi.__version__, sys.version]
+    api = (fw / sim[0]).read_text() if sim else ""
+    key_src = [cdef, api, " ".join(STRICT_CFLAGS), cffi.__version__, sys.version]
     key_src += [files[k] for k in sorted(files)]
-    if with_sim:
-        key_src += [(fw / s).read_text() for s in SIM_SOURCES] + [(fw / "runtime/plant2l.h").read_text()]
+    if sim:
+        key_src += [(fw / s).read_text() for s in (*sim[1], *sim[2])]
     key = hashlib.sha256("\0".join(key_src).encode()).hexdigest()[:16]
-    modname = f"_mpc_{model.prefix}_{key}"
+    modname = f"{tag}_{prefix}_{key}"
     bdir = cache_root() / modname
     so = _find_module(bdir, modname)
     if so is None:
@@ -111,7 +135,22 @@ def build_host_library(model: Model, t: TwoLevelTables, with_sim: bool = True) -
         tmp = bdir.with_name(f"{modname}.tmp{os.getpid()}")
         shutil.rmtree(tmp, ignore_errors=True)
         tmp.mkdir(parents=True)
-        _compile_module(modname, tmp, files, cdef, sim_api, with_sim, model.prefix)
+        write_files(files, tmp)
+        sources = [tmp / f"{prefix}_mpc.c"] + ([fw / s for s in sim[1]] if sim else [])
+        objs = []
+        for src in sources:
+            obj = tmp / (src.stem + ".o")
+            compile_object(src, obj, [tmp, fw / "runtime"])
+            objs.append(str(obj))
+        ffi = cffi.FFI()
+        ffi.cdef(cdef + "\n" + api)
+        includes = '#include "mpc_binding.h"\n' + (f'#include "{Path(sim[0]).name}"\n' if sim else "")
+        ffi.set_source(modname, includes, include_dirs=[str(tmp), str(fw / "runtime")],
+                       extra_objects=objs, libraries=["m"])
+        try:
+            ffi.compile(tmpdir=str(tmp), verbose=False)
+        except Exception as exc:  # cffi raises distutils/setuptools errors
+            raise BuildError(f"linking the cffi module {modname} failed: {exc}") from exc
         try:
             os.replace(tmp, bdir)
         except OSError:  # another process finished first: use its build
@@ -120,32 +159,9 @@ def build_host_library(model: Model, t: TwoLevelTables, with_sim: bool = True) -
         if so is None:
             raise BuildError(f"cffi produced no module in {bdir}")
     mod = _load(modname, so)
-    lib = HostLib(mod.ffi, mod.lib, bdir, model.prefix, with_sim)
+    lib = HostLib(mod.ffi, mod.lib, bdir, prefix, sim is not None, records)
     _check_layout(lib)
     return lib
-
-
-def _compile_module(modname: str, bdir: Path, files: dict[str, str], cdef: str, sim_api: str,
-                    with_sim: bool, prefix: str) -> None:
-    fw = firmware_dir()
-    write_files(files, bdir)
-    objs = []
-    sources = [bdir / f"{prefix}_mpc.c"]
-    if with_sim:
-        sources += [fw / s for s in SIM_SOURCES]
-    for src in sources:
-        obj = bdir / (src.stem + ".o")
-        compile_object(src, obj, [bdir, fw / "runtime"])
-        objs.append(str(obj))
-    ffi = cffi.FFI()
-    ffi.cdef(cdef + "\n" + sim_api)
-    includes = '#include "mpc_binding.h"\n' + ('#include "sim2l_api.h"\n' if with_sim else "")
-    ffi.set_source(modname, includes, include_dirs=[str(bdir), str(fw / "runtime")],
-                   extra_objects=objs, libraries=["m"])
-    try:
-        ffi.compile(tmpdir=str(bdir), verbose=False)
-    except Exception as exc:  # cffi raises distutils/setuptools errors
-        raise BuildError(f"linking the cffi module {modname} failed: {exc}") from exc
 
 
 def _find_module(bdir: Path, modname: str) -> Path | None:
@@ -168,8 +184,9 @@ def _load(modname: str, path: Path) -> ModuleType:
 
 def _check_layout(lib: HostLib) -> None:
     """The numpy records must match the C structs byte for byte."""
-    ffi, p = lib.ffi, lib.prefix
-    for ctype, dtype, fields in ((f"{p}_input_t", INPUT_DTYPE, INPUT_FIELDS), (f"{p}_output_t", OUTPUT_DTYPE, OUTPUT_FIELDS)):
+    ffi, p, r = lib.ffi, lib.prefix, lib.records
+    for ctype, dtype, fields in ((f"{p}_input_t", r.input_dtype, r.input_fields),
+                                 (f"{p}_output_t", r.output_dtype, r.output_fields)):
         if ffi.sizeof(ctype) != dtype.itemsize:
             raise BuildError(f"{ctype}: C size {ffi.sizeof(ctype)} != numpy {dtype.itemsize}")
         for f in fields:

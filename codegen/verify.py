@@ -67,6 +67,13 @@ def verify_strategy(
     parts["adversarial"] = adversarial_states(model, t, reference.step_batch, n_target=min(200_000, max(n_states // 5, 1000)))
     n_random = max(n_states - sum(len(p) for p in parts.values()), 0)
     parts["random"] = random_states(model, n_random, seed=11)
+    return compare_batches(model.controller.strategy, parts, lambda x: reference.step_batch(t, x),
+                           lib.step_batch, log, t0)
+
+
+def compare_batches(strategy: str, parts: dict[str, np.ndarray], ref_step: Callable[[np.ndarray], np.ndarray],
+                    c_step: Callable[[np.ndarray], np.ndarray], log: Callable[[str], None], t0: float) -> StrategyResult:
+    """Run both implementations over every state (in chunks) and compare bits."""
     states = np.concatenate(list(parts.values()))
     total = len(states)
     mismatches = 0
@@ -75,8 +82,8 @@ def verify_strategy(
     faulted = 0
     for lo in range(0, total, CHUNK):
         x = states[lo : lo + CHUNK]
-        ref = reference.step_batch(t, x)
-        got = lib.step_batch(x)
+        ref = ref_step(x)
+        got = c_step(x)
         bad, pf = mismatch_mask(ref, got)
         faulted += int((ref["fault"] != 0).sum())
         for k, v in pf.items():
@@ -87,10 +94,10 @@ def verify_strategy(
             first = f"state #{lo + i}:\n" + describe_mismatch(x[i], ref[i], got[i])
         mismatches += nb
         done = min(lo + CHUNK, total)
-        log(f"  {model.controller.strategy:12s} {done:>9d}/{total} states, {mismatches} mismatches")
+        log(f"  {strategy:12s} {done:>9d}/{total} states, {mismatches} mismatches")
     wall = time.perf_counter() - t0
     return StrategyResult(
-        strategy=model.controller.strategy,
+        strategy=strategy,
         states=total,
         mismatches=mismatches,
         sources={k: len(v) for k, v in parts.items()},

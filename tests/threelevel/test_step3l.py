@@ -1,0 +1,204 @@
+"""Three-level MPDTC step (mpdtc-three-level.md, numerics.md): strict
+compilation for every target profile, deterministic rendering, bit-for-bit
+equality of the generated C and the Python reference, and the decision's
+properties (switching constraint, T_N range, segment times)."""
+from __future__ import annotations
+
+import re
+import subprocess
+
+import numpy as np
+import pytest
+
+from codegen.config import load_config
+from codegen.threelevel import transitions as tr
+from codegen.threelevel import vectors as v
+from codegen.threelevel import virtual as vv
+from codegen.threelevel.derive import derive_three_level, t_n_min
+from codegen.threelevel.hostbuild import build_three_level_library
+from codegen.threelevel.interface import FAULT, INPUT_DTYPE, SAFE_STATE
+from codegen.threelevel import reference
+from codegen.threelevel.render import render_three_level
+from codegen.threelevel.states import adversarial_states, random_states
+from codegen.threelevel.verify import verify_three_level
+from conftest import EXAMPLES, require_tool
+
+TLEVEL = EXAMPLES / "seed000_tlevel.toml"
+STRATEGIES = ("mpdtc27", "mpdtc63")
+WARN = ["-std=c99", "-Wall", "-Wextra", "-Wconversion", "-Wdouble-promotion", "-Werror"]
+ARM = ["-mcpu=cortex-m7", "-mthumb", "-mfpu=fpv5-d16", "-mfloat-abi=hard", "-O2", "-ffp-contract=off", "-fno-math-errno"]
+
+
+def model(strategy: str):
+    return load_config(TLEVEL, {"controller.strategy": strategy})
+
+
+@pytest.fixture(scope="module", params=STRATEGIES)
+def built(request):
+    m = model(request.param)
+    t = derive_three_level(m)
+    return m, t, build_three_level_library(m, t)
+
+
+def _write(tmp_path, files):
+    for name, text in files.items():
+        (tmp_path / name).write_text(text)
+
+
+@pytest.mark.parametrize("strategy", STRATEGIES)
+def test_compiles_strict_for_every_target(tmp_path, strategy):
+    arm = require_tool("arm-none-eabi-gcc", "gcc-arm-none-eabi")
+    m = model(strategy)
+    t = derive_three_level(m)
+    for target in ("host", "stm32h743", "tms320f28377"):
+        d = tmp_path / target
+        d.mkdir()
+        files = render_three_level(m, t, target)
+        _write(d, files)
+        src = d / f"{m.prefix}_mpc.c"
+        r = subprocess.run(["gcc", *WARN, "-O2", "-ffp-contract=off", "-c", str(src), "-o", str(d / "x.o")],
+                           capture_output=True, text=True)
+        assert r.returncode == 0, r.stderr
+        if target == "stm32h743":
+            r = subprocess.run([arm, *ARM, *WARN, "-c", str(src), "-o", str(d / "m7.o")], capture_output=True, text=True)
+            assert r.returncode == 0, r.stderr
+            syms = subprocess.run(["arm-none-eabi-objdump", "-h", str(d / "m7.o")], capture_output=True, text=True).stdout
+            assert ".itcm_text" in syms and ".dtcm_rodata" in syms
+        if target == "tms320f28377":
+            for f in files.values():
+                code = re.sub(r"/\*.*?\*/", "", f, flags=re.S)
+                for bad in ("int8_t", "uint8_t", "double", "char "):
+                    assert bad not in code
+        assert "#define MPC_TOPOLOGY_THREE_LEVEL 1" in files["mpc_binding.h"]
+
+
+@pytest.mark.parametrize("strategy", STRATEGIES)
+def test_every_symbol_is_prefixed(tmp_path, strategy):
+    m = model(strategy)
+    _write(tmp_path, render_three_level(m, derive_three_level(m), "host"))
+    subprocess.run(["gcc", "-std=c99", "-O2", "-c", str(tmp_path / f"{m.prefix}_mpc.c"), "-o", str(tmp_path / "x.o")],
+                   check=True)
+    nm = subprocess.run(["nm", str(tmp_path / "x.o")], capture_output=True, text=True, check=True).stdout
+    for line in nm.splitlines():
+        parts = line.split()
+        if len(parts) >= 2 and parts[-2] in "TtDdRrBb" and not parts[-1].startswith("."):
+            assert parts[-1].startswith(m.prefix + "_"), parts[-1]
+
+
+@pytest.mark.parametrize("strategy", STRATEGIES)
+def test_rendering_is_deterministic(strategy):
+    m = model(strategy)
+    for target in ("host", "stm32h743", "tms320f28377"):
+        a = render_three_level(m, derive_three_level(m), target)
+        b = render_three_level(model(strategy), derive_three_level(model(strategy)), target)
+        assert a == b
+
+
+@pytest.mark.parametrize("strategy", STRATEGIES)
+def test_bit_for_bit_200k(strategy):
+    r = verify_three_level(model(strategy), 200_000)
+    assert r["states"] >= 200_000
+    assert r["mismatches"] == 0, r["first_mismatch"]
+    assert 0 < r["faulted_states"] < r["states"] // 5
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("strategy", STRATEGIES)
+def test_bit_for_bit_1e6(strategy):
+    r = verify_three_level(model(strategy), 1_000_000, seed=12)
+    assert r["mismatches"] == 0, r["first_mismatch"]
+
+
+def _decisions(m, t, lib, n=60_000):
+    x = np.concatenate([random_states(m, n, seed=5), adversarial_states(m, t, n_target=n // 2, seed=6)])
+    out = lib.step_batch(x)
+    ok = out["fault"] == 0
+    return x[ok], out[ok]
+
+
+def test_63_evaluates_3_to_7_costs(built):
+    m, t, lib = built
+    x, out = _decisions(m, t, lib)
+    if t.strategy == "mpdtc27":
+        assert (out["n_eval"] == 19).all() and (out["n_members"] == 27).all()
+        return
+    # PPP is never applied by 63-MPDTC (its zero is OOO); its rows are short
+    normal = x["prev_vector"] != v.PPP
+    assert ((out["n_eval"][normal] >= 3) & (out["n_eval"][normal] <= 7)).all()
+    assert (out["n_eval"] == out["n_groups"]).all()
+    assert set(np.unique(out["n_eval"][normal])) == {3, 4, 5, 6, 7} or len(np.unique(out["n_eval"][normal])) >= 3
+    # costs beyond n_eval are zero; the chosen candidate is the cheapest
+    for j in range(19):
+        beyond = j >= out["n_eval"]
+        assert (out["costs"][beyond, j] == 0).all() and (out["cand"][beyond, j] == 0).all()
+    assert np.array_equal(out["cost_best"], np.min(np.where(np.arange(19) < out["n_eval"][:, None], out["costs"], np.inf), axis=1).astype(np.float32))
+
+
+def test_switching_constraint_t_n_and_segments(built):
+    m, t, lib = built
+    x, out = _decisions(m, t, lib)
+    ts = m.controller.dt_s
+    tmin = np.float32(t_n_min(m))
+    allowed = tr.allowed_matrix()
+    if t.strategy == "mpdtc63":
+        prev_end = np.array([vv.end_state(int(p)) for p in x["prev_vector"]])
+        first = out["states"][:, 0].astype(int)
+        assert allowed[prev_end, first].all()
+        assert (out["vector"] != v.PPP).all() and (out["vector"] != v.NNN).all()
+    # inside a sequence every step obeys the constraint too
+    for k in range(6):
+        assert allowed[out["states"][:, k], out["states"][:, k + 1]].all()
+    virt = out["vector"] >= vv.FIRST_VIRTUAL_ID
+    assert ((out["t_n_s"][virt] >= tmin) & (out["t_n_s"][virt] <= np.float32(ts / 3))).all()
+    assert (out["t_n_s"][~virt] == 0).all()
+    seq = np.array([vv.virtual_of(int(i)).sequence if i >= 27 else (int(i),) * 7 for i in out["vector"]])
+    assert np.array_equal(out["states"].astype(int), seq)
+    assert (out["seg_s"] >= 0).all()
+    assert np.allclose(out["seg_s"].astype(np.float64).sum(axis=1), ts, rtol=1e-6, atol=0)
+    assert (out["seg_s"][~virt, 1:] == 0).all()
+
+
+def test_27_reaches_large_line_jumps_63_does_not():
+    """27-MPDTC has no switching constraint (spec), so jumps above Udc/2 occur."""
+    m = model("mpdtc27")
+    t = derive_three_level(m)
+    lib = build_three_level_library(m, t)
+    x, out = _decisions(m, t, lib, n=20_000)
+    basic = x["prev_vector"] < 27
+    jumps = [tr.line_jump_max(int(p), int(s)) for p, s in zip(x["prev_vector"][basic], out["states"][basic, 0])]
+    assert max(jumps) >= 2
+
+
+def test_guard_gives_safe_decision(built):
+    m, t, lib = built
+    x = random_states(m, 8, seed=3)
+    x["uc1_v"] = 110.0
+    x["uc2_v"] = 110.0
+    x["ia_a"] = 1.0
+    x["ib_a"] = 1.0
+    x["theta_e_rad"] = 0.5
+    x["omega_e_rad_s"] = 100.0
+    x["torque_ref_nm"] = 1.0
+    x["prev_vector"] = 13
+    x["t_n_prev_s"] = 0.0
+    x["ia_a"][0] = np.nan
+    x["uc2_v"][1] = 74.0
+    x["uc1_v"][2] = 151.0
+    x["prev_vector"][3] = 63
+    x["prev_vector"][4] = 40
+    x["t_n_prev_s"][4] = np.float32(1.0)
+    x["torque_ref_nm"][5] = np.inf
+    out = lib.step_batch(x)
+    ref = reference.step_batch(t, x)
+    assert list(out["fault"][:6]) == [FAULT["CURRENT"], FAULT["UDC_LOW"], FAULT["UDC_HIGH"], FAULT["STATE"],
+                                      FAULT["TN_PREV"], FAULT["TORQUE_REF"]]
+    assert (out["fault"][6:] == 0).all()
+    bad = out[:6]
+    assert (bad["states"] == SAFE_STATE).all() and (bad["vector"] == SAFE_STATE).all()
+    assert (bad["seg_s"][:, 0] == np.float32(m.controller.dt_s)).all() and (bad["seg_s"][:, 1:] == 0).all()
+    assert out.tobytes() == ref.tobytes()
+
+
+def test_input_names_are_the_simulator_contract():
+    assert INPUT_DTYPE.names == ("ia_a", "ib_a", "theta_e_rad", "omega_e_rad_s", "uc1_v", "uc2_v",
+                                 "torque_ref_nm", "prev_vector", "t_n_prev_s")
