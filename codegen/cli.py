@@ -134,6 +134,10 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     log = _log(args.quiet)
     if args.sweep_eps:
         data = run_threshold_sweep(model, args.sweep_eps, log=log)
+    elif model.inverter.topology == "t-type":
+        from .runs3l import run_three_level
+
+        data = run_three_level(model, _strategies(args, model), plots=Path(args.plots) if args.plots else None, log=log)
     else:
         data = run_scenarios(model, _strategies(args, model), plots=Path(args.plots) if args.plots else None, log=log)
     print(data.pop("_table"))

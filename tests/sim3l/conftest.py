@@ -73,7 +73,6 @@ def stub3(tmp_path_factory):
     lib.stub3_set_params(1.75, 1.6e-3, 0.045, 5, 50e-6, 1000e-6)
     seq = np.array([vv.sequence for vv in VIRTUAL], dtype=np.uint16).ravel()
     buf = ffi.new("unsigned short[]", seq.tolist())
-    lib._virtual_seq_buf = buf  # type: ignore[attr-defined]  # keep alive
 
     def set_mode(mode: int) -> None:
         lib.stub3_set_virtual(buf, 1 if mode == 63 else 0)
