@@ -34,7 +34,7 @@ STRICT_CFLAGS: tuple[str, ...] = (
     "-std=c99", "-O2", "-Wall", "-Wextra", "-Wconversion", "-Wdouble-promotion", "-Werror",
     "-ffp-contract=off", "-fno-math-errno",
 )
-SIM_SOURCES = ("runtime/plant2l.c", "runtime/sim2l.c")
+SIM_SOURCES = ("runtime/pmsm_dq.c", "runtime/speed_pi.c", "runtime/plant2l.c", "runtime/sim2l.c")
 SIM_API = "runtime/sim2l_api.h"
 
 
@@ -109,7 +109,7 @@ def _cdef(model: Model, t: TwoLevelTables) -> str:
 def build_host_library(model: Model, t: TwoLevelTables, with_sim: bool = True) -> HostLib:
     """Two-level: render the host profile (+ the closed-loop simulator), build, load."""
     files = render_two_level(model, t, "host")
-    sim = (SIM_API, SIM_SOURCES, ("runtime/plant2l.h",)) if with_sim else None
+    sim = (SIM_API, SIM_SOURCES, ("runtime/plant2l.h", "runtime/pmsm_dq.h", "runtime/speed_pi.h")) if with_sim else None
     return build_library(model.prefix, "_mpc", files, _cdef(model, t), TWO_LEVEL_RECORDS, sim)
 
 

@@ -273,6 +273,24 @@ def _f1_hz(trace: "Trace", model: Model, t0: float, t1: float) -> float:
     return w_e / (2.0 * math.pi)
 
 
+def ripple_summary(trace: Any, psi_ref: Any, run_mask: Any, rip_mask: Any) -> dict[str, float]:
+    """Torque and flux ripple entries shared by the two- and three-level metrics.
+
+    RMSE of Te - T* and |psi_s| - psi* over ``run_mask``; std and pp over
+    ``rip_mask`` (see :func:`ripple_stats`).  Keys in report order.
+    """
+    t_stats = ripple_stats(trace.te_nm, trace.torque_ref_nm, rip_mask)
+    p_stats = ripple_stats(trace.psi_wb, psi_ref, rip_mask)
+    return {
+        "T_rip_RMSE": rmse(trace.te_nm, trace.torque_ref_nm, run_mask),
+        "psi_rip_RMSE": rmse(trace.psi_wb, psi_ref, run_mask),
+        "T_rip_std": t_stats["std"],
+        "T_rip_pp": t_stats["pp"],
+        "psi_rip_std": p_stats["std"],
+        "psi_rip_pp": p_stats["pp"],
+    }
+
+
 def two_level_metrics(
     trace: "Trace",
     model: Model,
@@ -333,8 +351,6 @@ def two_level_metrics(
         sw_run, n_eval_run, t_run = trace.sw_applied[sl], trace.n_eval[sl], (sl.stop - sl.start) * dt
         sw0 = int(trace.sw_applied[sl.start - 1]) if sl.start > 0 else 0
 
-    t_stats = ripple_stats(trace.te_nm, trace.torque_ref_nm, rip_mask)
-    p_stats = ripple_stats(trace.psi_wb, psi_ref, rip_mask)
 
     thd_value = math.nan
     thd_info: dict[str, Any]
@@ -371,12 +387,7 @@ def two_level_metrics(
         )
 
     return {
-        "T_rip_RMSE": rmse(trace.te_nm, trace.torque_ref_nm, run_mask),
-        "psi_rip_RMSE": rmse(trace.psi_wb, psi_ref, run_mask),
-        "T_rip_std": t_stats["std"],
-        "T_rip_pp": t_stats["pp"],
-        "psi_rip_std": p_stats["std"],
-        "psi_rip_pp": p_stats["pp"],
+        **ripple_summary(trace, psi_ref, run_mask, rip_mask),
         "THD_ia": thd_value,
         "f_ave_hz": f_ave_hz(sw_run, t_run, sw0),
         "Cal_ave": cal_ave(n_eval_run),

@@ -44,7 +44,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .metrics import ripple_stats, rmse, steady_windows, thd, thd_window, window_mask, window_slice
+from .metrics import (_TOL, _t, ripple_stats, ripple_summary, steady_windows, thd, thd_window, window_mask,
+                      window_slice)
 from .model import Model
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -64,12 +65,7 @@ __all__ = [
 UAB_GRID_S = 1e-6
 #: Highest harmonic frequency counted in THD_uab.
 UAB_F_MAX_HZ = 50e3
-_TOL = 1e-6
 _OOO = 13
-
-
-def _t(k: int, dt_s: float) -> float:
-    return round(k * dt_s, 12)
 
 
 def _levels(states: np.ndarray) -> np.ndarray:
@@ -243,8 +239,6 @@ def three_level_metrics(
             uab_before = float(prev_v[-1]) if prev_v.size else 0.0
     t_run = (sl.stop - sl.start) * dt
 
-    t_stats = ripple_stats(trace.te_nm, trace.torque_ref_nm, rip_mask)
-    p_stats = ripple_stats(trace.psi_wb, psi_ref, rip_mask)
     vo = trace.vo_v if rip_mask is None else trace.vo_v[np.asarray(rip_mask)]
     vo_stats = {
         "std": float(np.std(vo)) if vo.size else math.nan,
@@ -296,12 +290,7 @@ def three_level_metrics(
         })
 
     return {
-        "T_rip_RMSE": rmse(trace.te_nm, trace.torque_ref_nm, run_mask),
-        "psi_rip_RMSE": rmse(trace.psi_wb, psi_ref, run_mask),
-        "T_rip_std": t_stats["std"],
-        "T_rip_pp": t_stats["pp"],
-        "psi_rip_std": p_stats["std"],
-        "psi_rip_pp": p_stats["pp"],
+        **ripple_summary(trace, psi_ref, run_mask, rip_mask),
         "THD_ia": thd_ia,
         "THD_uab": thd_uab,
         "Vo_std": vo_stats["std"],

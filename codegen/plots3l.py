@@ -11,31 +11,14 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
-from matplotlib.backends.backend_agg import FigureCanvasAgg
-from matplotlib.figure import Figure
-
 from .metrics import thd_window, window_slice
 from .model import Model
+from .plots import _new_figure, _save
 
 if TYPE_CHECKING:  # pragma: no cover
     from .simulate3l import Trace3
 
 __all__ = ["plot_three_level", "uab_steps"]
-
-_DPI = 120
-_W = 9.0
-
-
-def _new_figure(nrows: int = 1, height: float = 4.5):
-    fig = Figure(figsize=(_W, height), dpi=_DPI, layout="constrained")
-    FigureCanvasAgg(fig)
-    return fig, fig.subplots(nrows, 1, squeeze=False)[:, 0]
-
-
-def _save(fig: Figure, path: Path) -> Path:
-    fig.savefig(path, format="png")
-    return path
-
 
 def uab_steps(trace: "Trace3", sl: slice) -> tuple[np.ndarray, np.ndarray]:
     """(t, u_ab) step-plot points of the applied segments of periods sl (zero-length dropped)."""

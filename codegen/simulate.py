@@ -35,6 +35,8 @@ __all__ = [
     "scenario_arrays",
     "params_from_model",
     "run_closed_loop",
+    "run_chunked",
+    "fill_common_params",
     "controller_inputs",
 ]
 
@@ -101,8 +103,16 @@ def params_from_model(ffi: Any, model: Model, substeps: int | None = None) -> An
     load machine holds the speed profile; the torque reference is then the
     scenario's load torque, see sim2l_api.h).
     """
+    c = model.controller
+    p = fill_common_params(ffi.new("sim2l_params_t *"), model)
+    p.substeps = int(substeps) if substeps is not None else default_substeps(c.dt_s)
+    p.delay_compensation = 1 if c.delay_compensation else 0
+    return p
+
+
+def fill_common_params(p: Any, model: Model) -> Any:
+    """Set the fields sim2l_params_t and sim3l_params_t share (motor, Udc, dt, speed PI, mode)."""
     m, inv, c, sl = model.motor, model.inverter, model.controller, model.speed_loop
-    p = ffi.new("sim2l_params_t *")
     p.rs_ohm = m.rs_ohm
     p.ld_h = m.ld_h
     p.lq_h = m.lq_h
@@ -112,12 +122,10 @@ def params_from_model(ffi: Any, model: Model, substeps: int | None = None) -> An
     p.b_nms = m.b_nms
     p.udc_v = inv.udc_v
     p.dt_s = c.dt_s
-    p.substeps = int(substeps) if substeps is not None else default_substeps(c.dt_s)
     p.kp = sl.kp
     p.ki = sl.ki
     p.limit_nm = sl.limit_nm
     p.speed_imposed = 1 if model.scenario.speed_mode == "imposed" else 0
-    p.delay_compensation = 1 if c.delay_compensation else 0
     return p
 
 
@@ -184,6 +192,12 @@ _DOUBLE_FIELDS = (
 )
 _U16_FIELDS = ("sw", "sw_applied", "vector", "n_eval", "fault")
 _F32_FIELDS = ("te_est_nm", "psi_est_wb")
+#: Trace members: (dtype, values per period), in the order they are allocated.
+_FIELDS = {
+    **{name: (np.float64, 1) for name in _DOUBLE_FIELDS},
+    **{name: (np.uint16, 1) for name in _U16_FIELDS},
+    **{name: (np.float32, 1) for name in _F32_FIELDS},
+}
 _CTYPE = {np.dtype(np.float64): "double *", np.dtype(np.uint16): "unsigned short *",
           np.dtype(np.float32): "float *"}
 
@@ -211,45 +225,61 @@ def run_closed_loop(
     Raises :class:`SimulationError` if the simulator refuses the parameters
     or the run diverges.
     """
+    params = params_from_model(ffi, model, substeps)
+    arrays = run_chunked(ffi, lib, "sim2l", model, params, _FIELDS, _RUN_ERRORS, progress, chunk)
+    return Trace(dt_s=float(model.controller.dt_s), **arrays)
+
+
+def run_chunked(
+    ffi: Any,
+    lib: Any,
+    api: str,
+    model: Model,
+    params: Any,
+    fields: dict[str, tuple[Any, int]],
+    errors: dict[int, str],
+    progress: Callable[[float], None] | None,
+    chunk: int,
+) -> dict[str, np.ndarray]:
+    """Drive ``<api>_init`` + ``<api>_run`` over the model's scenario, chunk by chunk.
+
+    ``fields`` maps each trace member to (dtype, values per period); a member
+    with w > 1 values per period is returned with shape (n, w).  The returned
+    arrays (plus ``load_nm``) are read-only.  ``errors`` maps the C return
+    codes to messages.  ``progress`` is called after every chunk with the
+    completed fraction in (0, 1].  Raises :class:`SimulationError` if the
+    simulator refuses the parameters or the run diverges.
+    """
     if chunk < 1:
         raise ValueError("chunk must be >= 1")
     speed_ref, load = scenario_arrays(model)
     n = speed_ref.shape[0]
-    params = params_from_model(ffi, model, substeps)
-    state = ffi.new("sim2l_state_t *")
+    state = ffi.new(f"{api}_state_t *")
     where = f"{model.source or model.name}"
-    if lib.sim2l_init(params, state) != 0:
-        raise SimulationError(f"{where}: {_RUN_ERRORS[-1]}")
+    if getattr(lib, f"{api}_init")(params, state) != 0:
+        raise SimulationError(f"{where}: {errors[-1]}")
+    run = getattr(lib, f"{api}_run")
 
-    arrays: dict[str, np.ndarray] = {}
-    for name in _DOUBLE_FIELDS:
-        arrays[name] = np.zeros(n, dtype=np.float64)
-    for name in _U16_FIELDS:
-        arrays[name] = np.zeros(n, dtype=np.uint16)
-    for name in _F32_FIELDS:
-        arrays[name] = np.zeros(n, dtype=np.float32)
-
+    arrays: dict[str, np.ndarray] = {k: np.zeros(n * w, dtype=t) for k, (t, w) in fields.items()}
     keep = []  # keep the buffers alive while C holds pointers into them
     base = {}
     for name, arr in arrays.items():
         buf = ffi.from_buffer(arr, require_writable=True)
         keep.append(buf)
         base[name] = ffi.cast(_CTYPE[arr.dtype], buf)
-    ref_buf = ffi.from_buffer(speed_ref)
-    load_buf = ffi.from_buffer(load)
-    ref_ptr = ffi.cast("double *", ref_buf)
-    load_ptr = ffi.cast("double *", load_buf)
-    trace_c = ffi.new("sim2l_trace_t *")
+    ref_buf, load_buf = ffi.from_buffer(speed_ref), ffi.from_buffer(load)
+    ref_ptr, load_ptr = ffi.cast("double *", ref_buf), ffi.cast("double *", load_buf)
+    trace_c = ffi.new(f"{api}_trace_t *")
 
     k0 = 0
     while k0 < n:
         k1 = min(n, k0 + chunk)
         for name, ptr in base.items():
-            setattr(trace_c, name, ptr + k0)
-        rc = lib.sim2l_run(params, ref_ptr + k0, load_ptr + k0, k1 - k0, trace_c, state)
+            setattr(trace_c, name, ptr + k0 * fields[name][1])
+        rc = run(params, ref_ptr + k0, load_ptr + k0, k1 - k0, trace_c, state)
         if rc != 0:
             k_fail = int(state.k)
-            reason = _RUN_ERRORS.get(rc, f"simulator error {rc}")
+            reason = errors.get(rc, f"simulator error {rc}")
             raise SimulationError(
                 f"{where}: closed-loop run stopped at period {k_fail} "
                 f"(t = {k_fail * model.controller.dt_s:.6g} s): {reason}"
@@ -259,11 +289,14 @@ def run_closed_loop(
             progress(k1 / n)
     del keep, ref_buf, load_buf
 
+    for name, (_, w) in fields.items():
+        if w > 1:
+            arrays[name] = arrays[name].reshape(n, w)
     arrays["load_nm"] = load
     for arr in arrays.values():
         arr.flags.writeable = False
     speed_ref.flags.writeable = False
-    return Trace(dt_s=float(model.controller.dt_s), **arrays)
+    return arrays
 
 
 def controller_inputs(trace: Trace, model: Model) -> np.ndarray:

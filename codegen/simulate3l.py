@@ -24,7 +24,7 @@ from typing import Any, Callable
 import numpy as np
 
 from .model import Model
-from .simulate import RPM_TO_RAD_S, SimulationError, scenario_arrays
+from .simulate import RPM_TO_RAD_S, SimulationError, fill_common_params, run_chunked
 
 __all__ = [
     "MAX_SUBSTEP_S",
@@ -53,7 +53,7 @@ OOO = 13
 
 RUNTIME = Path(__file__).resolve().parent.parent / "firmware" / "runtime"
 #: Hand-written C of the three-level loop (add the controller + its mpc_binding.h).
-RUNTIME_SOURCES = (RUNTIME / "plant3l.c", RUNTIME / "sim3l.c")
+RUNTIME_SOURCES = (RUNTIME / "pmsm_dq.c", RUNTIME / "speed_pi.c", RUNTIME / "plant3l.c", RUNTIME / "sim3l.c")
 
 try:  # the generator's input record, when the three-level interface exists
     from .threelevel.interface import INPUT_DTYPE as INPUT3_DTYPE  # type: ignore[attr-defined]
@@ -92,23 +92,9 @@ def params_from_model3(ffi: Any, model: Model, substep_max_s: float | None = Non
     ``substep_max_s`` defaults to :data:`MAX_SUBSTEP_S`; ``speed_imposed``
     when ``scenario.speed_mode == "imposed"`` (T* is then the load torque).
     """
-    m, inv, c, sl = model.motor, model.inverter, model.controller, model.speed_loop
-    p = ffi.new("sim3l_params_t *")
-    p.rs_ohm = m.rs_ohm
-    p.ld_h = m.ld_h
-    p.lq_h = m.lq_h
-    p.psi_f_wb = m.psi_f_wb
-    p.pole_pairs = int(m.pole_pairs)
-    p.j_kgm2 = m.j_kgm2
-    p.b_nms = m.b_nms
-    p.udc_v = inv.udc_v
-    p.c_f = inv.c_f
-    p.dt_s = c.dt_s
+    p = fill_common_params(ffi.new("sim3l_params_t *"), model)
+    p.c_f = model.inverter.c_f
     p.substep_max_s = float(substep_max_s) if substep_max_s is not None else MAX_SUBSTEP_S
-    p.kp = sl.kp
-    p.ki = sl.ki
-    p.limit_nm = sl.limit_nm
-    p.speed_imposed = 1 if model.scenario.speed_mode == "imposed" else 0
     return p
 
 
@@ -189,8 +175,8 @@ _PER_PERIOD = {
     "vector_applied": np.uint16, "leg_changes": np.uint16,
 }
 _PER_SEGMENT = {"uab_v": np.float64, "seg_s": np.float64, "seg_states": np.uint16}
-_CTYPE = {np.dtype(np.float64): "double *", np.dtype(np.uint16): "unsigned short *",
-          np.dtype(np.float32): "float *"}
+#: Trace members: (dtype, values per period).
+_FIELDS = {**{k: (t, 1) for k, t in _PER_PERIOD.items()}, **{k: (t, N_SEG) for k, t in _PER_SEGMENT.items()}}
 
 _RUN_ERRORS = {
     -1: "invalid simulator arguments (motor/inverter/speed-loop parameters)",
@@ -215,52 +201,8 @@ def run_closed_loop3(
     ``progress`` is called after every chunk with the completed fraction.
     Raises :class:`SimulationError` on refused parameters or divergence.
     """
-    if chunk < 1:
-        raise ValueError("chunk must be >= 1")
-    speed_ref, load = scenario_arrays(model)
-    n = speed_ref.shape[0]
     params = params_from_model3(ffi, model, substep_max_s)
-    state = ffi.new("sim3l_state_t *")
-    where = f"{model.source or model.name}"
-    if lib.sim3l_init(params, state) != 0:
-        raise SimulationError(f"{where}: {_RUN_ERRORS[-1]}")
-
-    arrays: dict[str, np.ndarray] = {k: np.zeros(n, dtype=t) for k, t in _PER_PERIOD.items()}
-    arrays.update({k: np.zeros(n * N_SEG, dtype=t) for k, t in _PER_SEGMENT.items()})
-    keep = []
-    base = {}
-    for name, arr in arrays.items():
-        buf = ffi.from_buffer(arr, require_writable=True)
-        keep.append(buf)
-        base[name] = ffi.cast(_CTYPE[arr.dtype], buf)
-    ref_buf, load_buf = ffi.from_buffer(speed_ref), ffi.from_buffer(load)
-    ref_ptr, load_ptr = ffi.cast("double *", ref_buf), ffi.cast("double *", load_buf)
-    trace_c = ffi.new("sim3l_trace_t *")
-
-    k0 = 0
-    while k0 < n:
-        k1 = min(n, k0 + chunk)
-        for name, ptr in base.items():
-            setattr(trace_c, name, ptr + (k0 * N_SEG if name in _PER_SEGMENT else k0))
-        rc = lib.sim3l_run(params, ref_ptr + k0, load_ptr + k0, k1 - k0, trace_c, state)
-        if rc != 0:
-            k_fail = int(state.k)
-            reason = _RUN_ERRORS.get(rc, f"simulator error {rc}")
-            raise SimulationError(
-                f"{where}: closed-loop run stopped at period {k_fail} "
-                f"(t = {k_fail * model.controller.dt_s:.6g} s): {reason}"
-            )
-        k0 = k1
-        if progress is not None:
-            progress(k1 / n)
-    del keep, ref_buf, load_buf
-
-    for name in _PER_SEGMENT:
-        arrays[name] = arrays[name].reshape(n, N_SEG)
-    arrays["load_nm"] = load
-    for arr in arrays.values():
-        arr.flags.writeable = False
-    speed_ref.flags.writeable = False
+    arrays = run_chunked(ffi, lib, "sim3l", model, params, _FIELDS, _RUN_ERRORS, progress, chunk)
     return Trace3(dt_s=float(model.controller.dt_s), udc_v=float(model.inverter.udc_v), **arrays)
 
 

@@ -8,7 +8,9 @@ from .interface import INPUT_DTYPE, INPUT_FIELDS, OUTPUT_DTYPE, OUTPUT_FIELDS
 from .render import render_cdef, render_three_level
 
 THREE_LEVEL_RECORDS = Records(INPUT_FIELDS, OUTPUT_FIELDS, INPUT_DTYPE, OUTPUT_DTYPE)
-SIM3L = ("runtime/sim3l_api.h", ("runtime/plant3l.c", "runtime/sim3l.c"), ("runtime/plant3l.h",))
+SIM3L = ("runtime/sim3l_api.h",
+         ("runtime/pmsm_dq.c", "runtime/speed_pi.c", "runtime/plant3l.c", "runtime/sim3l.c"),
+         ("runtime/plant3l.h", "runtime/pmsm_dq.h", "runtime/speed_pi.h"))
 
 
 def build_three_level_library(model: Model, tables: ThreeLevelTables, with_sim: bool = False) -> HostLib:

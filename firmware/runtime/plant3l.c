@@ -16,9 +16,7 @@
 #include <math.h>
 #include <stddef.h>
 
-#define PLANT3L_TWO_PI 6.283185307179586476925286766559
-#define PLANT3L_SQRT3_INV 0.57735026918962576450914878050196  /* 1/sqrt(3) */
-#define PLANT3L_SQRT3_HALF 0.86602540378443864676372317075294 /* sqrt(3)/2 */
+#include "pmsm_dq.h"
 
 /* Constants of the right-hand side for one segment (one switching state). */
 typedef struct {
@@ -26,12 +24,7 @@ typedef struct {
     double ua0, ua1, ub0, ub1;
     /* i_o = ka*i_alpha + kb*i_beta, already divided by 2C: dV_o/dt = ka*i_al + kb*i_be */
     double ka, kb;
-    double inv_ld, rs_ld, lq_ld;          /* d-axis current equation */
-    double inv_lq, rs_lq, ld_lq, psif_lq; /* q-axis current equation */
-    double p;                             /* pole pairs (as double) */
-    double kt, psi_f, dl;                 /* torque: 1.5p, psi_f, Ld - Lq */
-    double inv_j, b_j, load_j;            /* mechanical equation */
-    int mech;                             /* 1: integrate omega_m, 0: held */
+    pmsm_dq_rhs_t m;                      /* motor equations (pmsm_dq.h) */
     int zero_u;                           /* 1: NNN/OOO/PPP: u = 0 and i_o = 0 */
 } rhs3_t;
 
@@ -59,10 +52,10 @@ static void state_coeffs(const plant3l_params_t *p, const int lv[3], double *ua0
     const double half = 0.5 * p->udc_v;
     *ua0 = (2.0 / 3.0) * half * (sa - 0.5 * (sb + sc));
     *ua1 = (2.0 / 3.0) * (aa - 0.5 * (ab + ac));
-    *ub0 = half * PLANT3L_SQRT3_INV * (sb - sc);
-    *ub1 = PLANT3L_SQRT3_INV * (ab - ac);
+    *ub0 = half * PMSM_DQ_SQRT3_INV * (sb - sc);
+    *ub1 = PMSM_DQ_SQRT3_INV * (ab - ac);
     *ka = -(aa - 0.5 * (ab + ac));
-    *kb = -PLANT3L_SQRT3_HALF * (ab - ac);
+    *kb = -PMSM_DQ_SQRT3_HALF * (ab - ac);
 }
 
 void plant3l_voltage_ab(const plant3l_params_t *p, int state, double vo_v,
@@ -95,12 +88,7 @@ double plant3l_uab(const plant3l_params_t *p, int state, double vo_v)
 
 void plant3l_phase_currents(const plant3l_state_t *s, double *ia_a, double *ib_a)
 {
-    const double cs = cos(s->theta_e_rad);
-    const double sn = sin(s->theta_e_rad);
-    const double i_alpha = s->i_d_a * cs - s->i_q_a * sn;
-    const double i_beta = s->i_d_a * sn + s->i_q_a * cs;
-    *ia_a = i_alpha;
-    *ib_a = -0.5 * i_alpha + PLANT3L_SQRT3_HALF * i_beta;
+    pmsm_dq_phase_currents(s->i_d_a, s->i_q_a, s->theta_e_rad, ia_a, ib_a);
 }
 
 double plant3l_io(const plant3l_state_t *s, int state)
@@ -117,28 +105,17 @@ double plant3l_io(const plant3l_state_t *s, int state)
 
 double plant3l_wrap_angle(double x)
 {
-    double y = fmod(x, PLANT3L_TWO_PI);
-    if (y < 0.0) {
-        y += PLANT3L_TWO_PI;
-    }
-    if (y >= PLANT3L_TWO_PI) { /* -tiny + 2*pi rounds up to 2*pi */
-        y = 0.0;
-    }
-    return y;
+    return pmsm_dq_wrap_angle(x);
 }
 
 double plant3l_torque(const plant3l_state_t *s, const plant3l_params_t *p)
 {
-    const double psi_d = p->ld_h * s->i_d_a + p->psi_f_wb;
-    const double psi_q = p->lq_h * s->i_q_a;
-    return 1.5 * (double)p->pole_pairs * (psi_d * s->i_q_a - psi_q * s->i_d_a);
+    return pmsm_dq_torque(s->i_d_a, s->i_q_a, p->ld_h, p->lq_h, p->psi_f_wb, p->pole_pairs);
 }
 
 double plant3l_flux(const plant3l_state_t *s, const plant3l_params_t *p)
 {
-    const double psi_d = p->ld_h * s->i_d_a + p->psi_f_wb;
-    const double psi_q = p->lq_h * s->i_q_a;
-    return sqrt(psi_d * psi_d + psi_q * psi_q);
+    return pmsm_dq_flux(s->i_d_a, s->i_q_a, p->ld_h, p->lq_h, p->psi_f_wb);
 }
 
 /* ---------------------------------------------------------------------------
@@ -155,7 +132,6 @@ double plant3l_flux(const plant3l_state_t *s, const plant3l_params_t *p)
 static inline void rhs3(const rhs3_t *c, double id, double iq, double wm, double vo, double cs,
                         double sn, double *did, double *diq, double *dwm, double *dth, double *dvo)
 {
-    const double we = c->p * wm;
     double ud = 0.0, uq = 0.0;
     if (!c->zero_u) {
         const double ua = c->ua0 + c->ua1 * vo;
@@ -168,31 +144,7 @@ static inline void rhs3(const rhs3_t *c, double id, double iq, double wm, double
     } else {
         *dvo = 0.0;
     }
-    *did = c->inv_ld * ud - c->rs_ld * id + we * c->lq_ld * iq;
-    *diq = c->inv_lq * uq - c->rs_lq * iq - we * c->ld_lq * id - we * c->psif_lq;
-    if (c->mech) {
-        const double te = c->kt * (c->psi_f * iq + c->dl * id * iq);
-        *dwm = c->inv_j * te - c->load_j - c->b_j * wm;
-    } else {
-        *dwm = 0.0;
-    }
-    *dth = we;
-}
-
-/* cos/sin of theta + d from cos/sin of theta; Taylor for |d| <= 0.01 (as plant2l.c). */
-static inline void rotate(double c0, double s0, double d, double *cs, double *sn)
-{
-    double cd, sd;
-    if (fabs(d) <= 1e-2) {
-        const double d2 = d * d;
-        sd = d * (1.0 - d2 * (1.0 / 6.0) * (1.0 - d2 * (1.0 / 20.0) * (1.0 - d2 * (1.0 / 42.0))));
-        cd = 1.0 - d2 * 0.5 * (1.0 - d2 * (1.0 / 12.0) * (1.0 - d2 * (1.0 / 30.0) * (1.0 - d2 * (1.0 / 56.0))));
-    } else {
-        cd = cos(d);
-        sd = sin(d);
-    }
-    *cs = c0 * cd - s0 * sd;
-    *sn = s0 * cd + c0 * sd;
+    pmsm_dq_derivs(&c->m, id, iq, wm, ud, uq, did, diq, dwm, dth);
 }
 
 static void setup(rhs3_t *c, const plant3l_params_t *p, int state, double load_nm, int speed_imposed)
@@ -203,27 +155,8 @@ static void setup(rhs3_t *c, const plant3l_params_t *p, int state, double load_n
     c->ka = c->ka / (2.0 * p->c_f);
     c->kb = c->kb / (2.0 * p->c_f);
     c->zero_u = (lv[0] == lv[1] && lv[1] == lv[2]);
-    c->inv_ld = 1.0 / p->ld_h;
-    c->rs_ld = p->rs_ohm / p->ld_h;
-    c->lq_ld = p->lq_h / p->ld_h;
-    c->inv_lq = 1.0 / p->lq_h;
-    c->rs_lq = p->rs_ohm / p->lq_h;
-    c->ld_lq = p->ld_h / p->lq_h;
-    c->psif_lq = p->psi_f_wb / p->lq_h;
-    c->p = (double)p->pole_pairs;
-    c->kt = 1.5 * c->p;
-    c->psi_f = p->psi_f_wb;
-    c->dl = p->ld_h - p->lq_h;
-    c->mech = speed_imposed ? 0 : 1;
-    if (c->mech) {
-        c->inv_j = 1.0 / p->j_kgm2;
-        c->b_j = p->b_nms / p->j_kgm2;
-        c->load_j = load_nm / p->j_kgm2;
-    } else {
-        c->inv_j = 0.0;
-        c->b_j = 0.0;
-        c->load_j = 0.0;
-    }
+    pmsm_dq_rhs_setup(&c->m, p->rs_ohm, p->ld_h, p->lq_h, p->psi_f_wb, p->pole_pairs, p->j_kgm2,
+                      p->b_nms, load_nm, speed_imposed);
 }
 
 /* Classic RK4, `substeps` equal sub-steps of h = dt/substeps, on the
@@ -232,7 +165,7 @@ static void setup(rhs3_t *c, const plant3l_params_t *p, int state, double load_n
  *   x <- x + h/6 (k1 + 2 k2 + 2 k3 + k4).
  * Each stage uses its own angle (theta + h/2*w_e1, theta + h/2*w_e2,
  * theta + h*w_e3) for Park; cos/sin from one libm call per sub-step plus
- * rotate(). */
+ * pmsm_dq_rotate(). */
 static void integrate(const rhs3_t *c, plant3l_state_t *s, double dt_s, int substeps)
 {
     const double h = dt_s / (double)substeps;
@@ -252,17 +185,17 @@ static void integrate(const rhs3_t *c, plant3l_state_t *s, double dt_s, int subs
         rhs3(c, id, iq, wm, vo, c0, s0, &d1, &q1, &w1, &t1, &v1);
 
         if (!c->zero_u) {
-            rotate(c0, s0, h2 * t1, &cs, &sn);
+            pmsm_dq_rotate(c0, s0, h2 * t1, &cs, &sn);
         }
         rhs3(c, id + h2 * d1, iq + h2 * q1, wm + h2 * w1, vo + h2 * v1, cs, sn, &d2, &q2, &w2, &t2, &v2);
 
         if (!c->zero_u && t2 != t1) {
-            rotate(c0, s0, h2 * t2, &cs, &sn);
+            pmsm_dq_rotate(c0, s0, h2 * t2, &cs, &sn);
         }
         rhs3(c, id + h2 * d2, iq + h2 * q2, wm + h2 * w2, vo + h2 * v2, cs, sn, &d3, &q3, &w3, &t3, &v3);
 
         if (!c->zero_u) {
-            rotate(c0, s0, h * t3, &cs, &sn);
+            pmsm_dq_rotate(c0, s0, h * t3, &cs, &sn);
         }
         rhs3(c, id + h * d3, iq + h * q3, wm + h * w3, vo + h * v3, cs, sn, &d4, &q4, &w4, &t4, &v4);
 
@@ -288,7 +221,7 @@ int plant3l_advance(plant3l_state_t *s, const plant3l_params_t *p, int state,
     }
     setup(&c, p, state, load_nm, speed_imposed);
     integrate(&c, s, dt_s, substeps);
-    s->theta_e_rad = plant3l_wrap_angle(s->theta_e_rad);
+    s->theta_e_rad = pmsm_dq_wrap_angle(s->theta_e_rad);
     return 0;
 }
 
@@ -320,6 +253,6 @@ int plant3l_advance_segments(plant3l_state_t *s, const plant3l_params_t *p,
             integrate(&c, s, seg_s[i], n);
         }
     }
-    s->theta_e_rad = plant3l_wrap_angle(s->theta_e_rad);
+    s->theta_e_rad = pmsm_dq_wrap_angle(s->theta_e_rad);
     return 0;
 }

@@ -18,12 +18,9 @@
 
 #include "sim2l_api.h"
 #include "plant2l.h"
+#include "pmsm_dq.h"
+#include "speed_pi.h"
 #include "mpc_binding.h"
-
-static int finite_positive(double x)
-{
-    return isfinite(x) && x > 0.0;
-}
 
 static void plant_params(const sim2l_params_t *p, plant2l_params_t *pp)
 {
@@ -42,19 +39,10 @@ static int params_valid(const sim2l_params_t *p)
     if (p == NULL) {
         return 0;
     }
-    if (!finite_positive(p->ld_h) || !finite_positive(p->lq_h) || !finite_positive(p->udc_v)
-        || !finite_positive(p->dt_s) || !isfinite(p->rs_ohm) || p->rs_ohm < 0.0
-        || !isfinite(p->psi_f_wb) || !isfinite(p->b_nms) || !isfinite(p->kp)
-        || !isfinite(p->ki) || !isfinite(p->limit_nm) || p->limit_nm < 0.0) {
-        return 0;
-    }
-    if (p->pole_pairs < 1 || p->substeps < 1) {
-        return 0;
-    }
-    if (!p->speed_imposed && !finite_positive(p->j_kgm2)) {
-        return 0;
-    }
-    return 1;
+    return pmsm_dq_sim_params_valid(p->rs_ohm, p->ld_h, p->lq_h, p->psi_f_wb, p->pole_pairs,
+                                    p->j_kgm2, p->b_nms, p->udc_v, p->dt_s, p->kp, p->ki,
+                                    p->limit_nm, p->speed_imposed)
+           && p->substeps >= 1;
 }
 
 int sim2l_init(const sim2l_params_t *p, sim2l_state_t *state)
@@ -70,33 +58,6 @@ int sim2l_init(const sim2l_params_t *p, sim2l_state_t *state)
     state->sw_prev = 0;
     state->k = 0;
     return 0;
-}
-
-/* Speed PI, one period (mptc-two-level.md "Parameters and scenarios"):
- *   e = w_ref - w_m (mechanical, rad/s); u = kp*e + I; T* = clamp(u, +-L)
- *   anti-windup, conditional integration: I += ki*e*dt unless
- *   (u > L and e > 0) or (u < -L and e < 0); then I = clamp(I, +-L). */
-static double speed_pi(const sim2l_params_t *p, double *integral, double w_ref, double w_m)
-{
-    const double lim = p->limit_nm;
-    const double e = w_ref - w_m;
-    const double u = p->kp * e + *integral;
-    double t_ref = u;
-    if (t_ref > lim) {
-        t_ref = lim;
-    } else if (t_ref < -lim) {
-        t_ref = -lim;
-    }
-    if (!((u > lim && e > 0.0) || (u < -lim && e < 0.0))) {
-        double i_new = *integral + p->ki * e * p->dt_s;
-        if (i_new > lim) {
-            i_new = lim;
-        } else if (i_new < -lim) {
-            i_new = -lim;
-        }
-        *integral = i_new;
-    }
-    return t_ref;
 }
 
 int sim2l_run(const sim2l_params_t *p, const double *speed_ref_rad_s, const double *load_nm,
@@ -146,7 +107,8 @@ int sim2l_run(const sim2l_params_t *p, const double *speed_ref_rad_s, const doub
         if (p->speed_imposed) {
             t_ref = load;
         } else {
-            t_ref = speed_pi(p, &integral, w_ref, x.omega_m_rad_s);
+            t_ref = speed_pi_step(p->kp, p->ki, p->dt_s, p->limit_nm, &integral, w_ref,
+                                  x.omega_m_rad_s);
         }
 
         /* 4. controller step, inputs cast to float as a real controller sees them */

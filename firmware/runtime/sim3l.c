@@ -15,15 +15,12 @@
 
 #include "sim3l_api.h"
 #include "plant3l.h"
+#include "pmsm_dq.h"
+#include "speed_pi.h"
 #include "mpc_binding.h"
 
 #define SIM3L_OOO 13
 #define SIM3L_N_VECTORS 63
-
-static int finite_positive(double x)
-{
-    return isfinite(x) && x > 0.0;
-}
 
 static void plant_params(const sim3l_params_t *p, plant3l_params_t *pp)
 {
@@ -43,19 +40,10 @@ static int params_valid(const sim3l_params_t *p)
     if (p == NULL) {
         return 0;
     }
-    if (!finite_positive(p->ld_h) || !finite_positive(p->lq_h) || !finite_positive(p->udc_v)
-        || !finite_positive(p->c_f) || !finite_positive(p->dt_s) || !finite_positive(p->substep_max_s)
-        || !isfinite(p->rs_ohm) || p->rs_ohm < 0.0 || !isfinite(p->psi_f_wb) || !isfinite(p->b_nms)
-        || !isfinite(p->kp) || !isfinite(p->ki) || !isfinite(p->limit_nm) || p->limit_nm < 0.0) {
-        return 0;
-    }
-    if (p->pole_pairs < 1) {
-        return 0;
-    }
-    if (!p->speed_imposed && !finite_positive(p->j_kgm2)) {
-        return 0;
-    }
-    return 1;
+    return pmsm_dq_sim_params_valid(p->rs_ohm, p->ld_h, p->lq_h, p->psi_f_wb, p->pole_pairs,
+                                    p->j_kgm2, p->b_nms, p->udc_v, p->dt_s, p->kp, p->ki,
+                                    p->limit_nm, p->speed_imposed)
+           && pmsm_dq_finite_positive(p->c_f) && pmsm_dq_finite_positive(p->substep_max_s);
 }
 
 int sim3l_init(const sim3l_params_t *p, sim3l_state_t *state)
@@ -75,33 +63,6 @@ int sim3l_init(const sim3l_params_t *p, sim3l_state_t *state)
     state->last_state = SIM3L_OOO;
     state->k = 0;
     return 0;
-}
-
-/* Speed PI, one period (identical to sim2l.c):
- *   e = w_ref - w_m; u = kp*e + I; T* = clamp(u, +-L); conditional
- *   integration I += ki*e*dt unless u saturated with e pushing further;
- *   then I = clamp(I, +-L). */
-static double speed_pi(const sim3l_params_t *p, double *integral, double w_ref, double w_m)
-{
-    const double lim = p->limit_nm;
-    const double e = w_ref - w_m;
-    const double u = p->kp * e + *integral;
-    double t_ref = u;
-    if (t_ref > lim) {
-        t_ref = lim;
-    } else if (t_ref < -lim) {
-        t_ref = -lim;
-    }
-    if (!((u > lim && e > 0.0) || (u < -lim && e < 0.0))) {
-        double i_new = *integral + p->ki * e * p->dt_s;
-        if (i_new > lim) {
-            i_new = lim;
-        } else if (i_new < -lim) {
-            i_new = -lim;
-        }
-        *integral = i_new;
-    }
-    return t_ref;
 }
 
 /* Sum of |S_x(to) - S_x(from)| over the three legs. */
@@ -220,7 +181,8 @@ int sim3l_run(const sim3l_params_t *p, const double *speed_ref_rad_s, const doub
         if (p->speed_imposed) {
             t_ref = load;
         } else {
-            t_ref = speed_pi(p, &integral, w_ref, x.omega_m_rad_s);
+            t_ref = speed_pi_step(p->kp, p->ki, p->dt_s, p->limit_nm, &integral, w_ref,
+                                  x.omega_m_rad_s);
         }
 
         /* 4. controller step, inputs cast to float */
