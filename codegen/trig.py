@@ -112,3 +112,20 @@ def sincos_f32(x: np.ndarray, k: SinCosCoeffs | None = None) -> tuple[np.ndarray
     s_out = np.select([q == 0, q == 1, q == 2], [sr, cr, -sr], -cr).astype(np.float32)
     c_out = np.select([q == 0, q == 1, q == 2], [cr, -sr, -cr], sr).astype(np.float32)
     return s_out, c_out
+
+
+def sincos_constants() -> list[tuple[str, np.float32, str, str]]:
+    """(name, value, unit, meaning) of every constant the generated sin/cos uses."""
+    k = sincos_coeffs()
+    return [
+        ("TWO_OVER_PI", k.two_over_pi, "1/rad", "2/pi: quadrant of theta_e"),
+        ("PIO2_HI", k.pio2_hi, "rad", "pi/2, high part (Cody-Waite)"),
+        ("PIO2_LO", k.pio2_lo, "rad", "pi/2 - PIO2_HI"),
+        ("SIN_S3", k.s[0], "", "sin r = r + r^3 (S3 + r^2 (S5 + r^2 S7))"),
+        ("SIN_S5", k.s[1], "", "(fit on [0, pi/4])"),
+        ("SIN_S7", k.s[2], "", ""),
+        ("COS_C2", k.c[0], "", "cos r = 1 + r^2 (C2 + r^2 (C4 + r^2 (C6 + r^2 C8)))"),
+        ("COS_C4", k.c[1], "", ""),
+        ("COS_C6", k.c[2], "", ""),
+        ("COS_C8", k.c[3], "", ""),
+    ]

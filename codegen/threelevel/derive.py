@@ -23,7 +23,7 @@ import numpy as np
 
 from ..f32 import f32
 from ..model import Model
-from ..trig import ANGLE_GUARD_RAD, sincos_coeffs
+from ..trig import ANGLE_GUARD_RAD, sincos_constants
 from ..twolevel.derive import Const
 from . import candidates as cd
 from . import vectors as v
@@ -111,19 +111,7 @@ def t_n_min(model: Model) -> float:
 def _constants(model: Model) -> list[Const]:
     m, c, inv = model.motor, model.controller, model.inverter
     ts = c.dt_s
-    k = sincos_coeffs()
-    out: list[Const] = [
-        Const("TWO_OVER_PI", k.two_over_pi, "1/rad", "2/pi: quadrant of theta_e"),
-        Const("PIO2_HI", k.pio2_hi, "rad", "pi/2, high part (Cody-Waite)"),
-        Const("PIO2_LO", k.pio2_lo, "rad", "pi/2 - PIO2_HI"),
-        Const("SIN_S3", k.s[0], "", "sin r = r + r^3 (S3 + r^2 (S5 + r^2 S7))"),
-        Const("SIN_S5", k.s[1], "", "(fit on [0, pi/4])"),
-        Const("SIN_S7", k.s[2], "", ""),
-        Const("COS_C2", k.c[0], "", "cos r = 1 + r^2 (C2 + r^2 (C4 + r^2 (C6 + r^2 C8)))"),
-        Const("COS_C4", k.c[1], "", ""),
-        Const("COS_C6", k.c[2], "", ""),
-        Const("COS_C8", k.c[3], "", ""),
-    ]
+    out: list[Const] = [Const(*c) for c in sincos_constants()]
     for name, val in guard_limits(model).items():
         out.append(Const(name, f32(val), name.rsplit("_", 1)[-1].lower(), "input guard limit"))
     out += [
