@@ -20,15 +20,15 @@ import subprocess
 import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from .errors import MpcgenError
 from .fwproject import QEMU, build_firmware, make_test_sets, require_tools, write_firmware_project
-from .fwdata import values_crc
+from .fwdata import topology_of, values_crc
 from .model import Model
 from .twolevel.derive import TwoLevelTables
-from .twolevel.interface import INPUT_FIELDS, OUTPUT_FIELDS
 
 #: Default -icount shift: 25.6 SysTick ticks per instruction.
 ICOUNT_SHIFT = 10
@@ -203,14 +203,18 @@ class StrategyCounts:
     uart: str = ""
 
 
-def run_and_check(model: Model, tables: TwoLevelTables, workdir: Path, *, n_selftest: int = 10000,
+def run_and_check(model: Model, tables: TwoLevelTables | Any, workdir: Path, *, n_selftest: int = 10000,
                   n_bench: int = 2000, icount_shift: int = ICOUNT_SHIFT, timeout_s: float = 300.0) -> StrategyCounts:
     """Write, build and run one qemu-m7 image; check it against the reference; count instructions.
 
     The firmware compares every output with its embedded expected outputs;
     independently, the host recomputes the CRC-32 of all inputs and outputs
     from the Python reference and compares it with the firmware's digests.
+    Either topology (``tables``: TwoLevelTables or ThreeLevelTables to match
+    ``model.inverter.topology``); the bench set is the topology's recorded
+    trajectory (three-level: the 27-MPDTC run at rated speed).
     """
+    topo = topology_of(model)
     workdir = Path(workdir)
     write_firmware_project(model, tables, "qemu-m7", workdir, n_selftest, n_bench=n_bench)
     build = build_firmware(workdir, "qemu-m7")
@@ -226,8 +230,8 @@ def run_and_check(model: Model, tables: TwoLevelTables, workdir: Path, *, n_self
         got = rep.sets.get(ts.name)
         if got is None:
             raise EmulationError(f"no SUMMARY for set {ts.name}; output ends {run.uart[-300:]!r}")
-        ok &= (got.n == len(ts.states) and got.crc_in == values_crc(ts.states, INPUT_FIELDS)
-               and got.crc_out == values_crc(ts.expected, OUTPUT_FIELDS))
+        ok &= (got.n == len(ts.states) and got.crc_in == values_crc(ts.states, topo.input_fields)
+               and got.crc_out == values_crc(ts.expected, topo.output_fields))
     bench = rep.sets.get("bench")
     instr = ticks_to_instructions(bench.cycles if bench else [0], icount_shift)
     return StrategyCounts(tables.strategy, sum(s.n for s in rep.sets.values()),

@@ -16,12 +16,13 @@ from __future__ import annotations
 import math
 import zlib
 from dataclasses import dataclass
+from typing import Any, Callable
 
 import numpy as np
 
 from .model import Model
 from .twolevel.derive import TwoLevelTables, guard_limits
-from .twolevel.interface import INPUT_DTYPE, INPUT_FIELDS, OUTPUT_FIELDS, Field
+from .twolevel.interface import INPUT_DTYPE, INPUT_FIELDS, OUTPUT_DTYPE, OUTPUT_FIELDS, Field
 from .twolevel.reference import step_batch
 
 #: Seed of the self-test states (the set is a pure function of config and n).
@@ -185,8 +186,8 @@ def guard_cases(model: Model) -> np.ndarray:
     return _records(*cols)
 
 
-def selftest_states(model: Model, t: TwoLevelTables, n: int, seed: int = SELFTEST_SEED) -> np.ndarray:
-    """``n`` deterministic self-test states: guard cases first, then the random mix."""
+def _selftest_states2(model: Model, t: TwoLevelTables, n: int, seed: int = SELFTEST_SEED) -> np.ndarray:
+    """Two-level: ``n`` deterministic self-test states: guard cases first, then the random mix."""
     if n < 1:
         raise ValueError("n must be >= 1")
     rng = np.random.default_rng(seed)
@@ -200,8 +201,8 @@ def selftest_states(model: Model, t: TwoLevelTables, n: int, seed: int = SELFTES
     return np.concatenate(parts)[:n]
 
 
-def trajectory_states(model: Model, t: TwoLevelTables, n: int) -> np.ndarray:
-    """``n`` states evenly spaced over the conventional controller's closed-loop run.
+def _trajectory_states2(model: Model, t: TwoLevelTables, n: int) -> np.ndarray:
+    """Two-level: ``n`` states evenly spaced over the conventional controller's closed-loop run.
 
     Every strategy is benchmarked on the same recorded trajectory (that of
     the conventional variant, as seed 001 section 7 does).  Runs the compiled simulator (host build of the generated controller with
@@ -224,15 +225,180 @@ def trajectory_states(model: Model, t: TwoLevelTables, n: int) -> np.ndarray:
         fcntl.flock(lock, fcntl.LOCK_EX)
         lib = build_host_library(model, t, with_sim=True)
     trace = run_closed_loop(lib.ffi, lib.lib, model)
-    x = controller_inputs(trace, model)
+    return _evenly_spaced(controller_inputs(trace, model), n)
+
+
+def _evenly_spaced(x: np.ndarray, n: int) -> np.ndarray:
     idx = np.linspace(0, len(x) - 1, num=min(n, len(x))).round().astype(np.intp)
     return x[idx]
 
 
-def expected_outputs(t: TwoLevelTables, states: np.ndarray) -> np.ndarray:
+# ---------------------------------------------------------------- three-level states
+
+def guard_cases3(model: Model, t: Any) -> np.ndarray:
+    """Three-level fixed adversarial states: every guard limit exactly and one float32
+    step beyond (the step's own float32 constants), NaN/inf in every float input,
+    invalid prev_vector, t_n_prev_s out of [0, Ts/3] for a virtual previous vector."""
+    from .threelevel.interface import INPUT_DTYPE as IN3
+
+    up = lambda v: np.nextafter(F(v), F(np.inf))  # noqa: E731
+    down = lambda v: np.nextafter(F(v), F(-np.inf))  # noqa: E731
+    udc = model.inverter.udc_v
+    ts3 = t.const("TS3_S")
+    base = {"ia_a": F(1.0), "ib_a": F(-0.5), "theta_e_rad": F(0.3), "omega_e_rad_s": F(100.0),
+            "uc1_v": F(udc / 2), "uc2_v": F(udc / 2), "torque_ref_nm": F(0.5), "prev_vector": 13,
+            "t_n_prev_s": F(0.0)}
+    rows: list[dict] = [dict(base), {**base, "ia_a": F(0), "ib_a": F(0), "theta_e_rad": F(0), "omega_e_rad_s": F(0),
+                                     "torque_ref_nm": F(0)},
+                        {**base, "ia_a": F(-0.0), "ib_a": F(-0.0), "theta_e_rad": F(-0.0),
+                         "omega_e_rad_s": F(-0.0), "torque_ref_nm": F(-0.0)}]
+    floats = ("ia_a", "ib_a", "theta_e_rad", "omega_e_rad_s", "uc1_v", "uc2_v", "torque_ref_nm")
+    for name in floats:
+        for v in (F(np.nan), F(np.inf), F(-np.inf)):
+            rows.append({**base, name: v})
+    rows.append({**base, "prev_vector": 40, "t_n_prev_s": F(np.nan)})
+    signed = {"ia_a": "I_TRIP_A", "ib_a": "I_TRIP_A", "theta_e_rad": "ANGLE_GUARD_RAD",
+              "omega_e_rad_s": "OMEGA_GUARD_RAD_S", "torque_ref_nm": "TORQUE_REF_GUARD_NM"}
+    for name, c in signed.items():
+        lim = t.const(c)
+        for v in (lim, up(lim), -lim, down(-lim), down(lim)):
+            r = {**base, name: v}
+            if name == "ia_a":  # keep i_c = -(i_a + i_b) small so only the tested value matters
+                r["ib_a"] = F(-v / F(2))
+            elif name == "ib_a":
+                r["ia_a"] = F(-v / F(2))
+            rows.append(r)
+    lo, hi = t.const("UC_MIN_V"), t.const("UC_MAX_V")
+    for name in ("uc1_v", "uc2_v"):
+        for v in (lo, down(lo), up(lo), hi, up(hi), down(hi)):
+            rows.append({**base, name: v})
+    third = F(t.const("I_TRIP_A") * F(0.5))  # i_c alone above the trip limit
+    rows.append({**base, "ia_a": up(third), "ib_a": up(third)})
+    rows += [{**base, "prev_vector": p} for p in (63, 64, 255, 0xFFFF)]
+    for p in (13, 26, 27, 45, 62):  # basic (t_n_prev ignored) and virtual previous vectors
+        for v in (F(0), F(-0.0), down(F(0)), ts3, up(ts3), t.const("TS3_S") / F(2)):
+            rows.append({**base, "prev_vector": p, "t_n_prev_s": v})
+    g_w = t.const("OMEGA_GUARD_RAD_S")
+    rows += [{**base, "omega_e_rad_s": w} for w in (F(0), g_w, -g_w)]
+    x = np.zeros(len(rows), IN3)
+    for i, r in enumerate(rows):
+        for k, v in r.items():
+            x[k][i] = v
+    return x
+
+
+def _selftest_states3(model: Model, t: Any, n: int, seed: int = SELFTEST_SEED) -> np.ndarray:
+    """Three-level: ``n`` deterministic self-test states: guard cases, then adversarial
+    (codegen.threelevel.states: sector borders, ties, angle reduction, limits, every
+    prev_vector) and random states over the operating range, about half each."""
+    from .threelevel.states import adversarial_states, random_states
+
+    if n < 1:
+        raise ValueError("n must be >= 1")
+    fixed = guard_cases3(model, t)
+    rest = max(0, n - len(fixed))
+    adv = adversarial_states(model, t, max(rest // 2, 1), seed + 1)[: rest // 2]
+    rnd = random_states(model, rest - len(adv), seed)
+    return np.concatenate([fixed, adv, rnd])[:n]
+
+
+def _trajectory_states3(model: Model, t: Any, n: int) -> np.ndarray:
+    """Three-level: ``n`` states evenly spaced over the 27-MPDTC run at rated speed and
+    rated torque (``codegen.runs3l.steady_model``), the trajectory every three-level
+    strategy is benchmarked on (as ``mpcgen bench`` does on the host)."""
+    import fcntl
+
+    from .hostbuild import cache_root
+    from .runs3l import steady_model
+    from .simulate3l import controller_inputs3, run_closed_loop3
+    from .threelevel.derive import derive_three_level
+    from .threelevel.hostbuild import build_three_level_library
+
+    model = steady_model(model.with_controller(strategy="mpdtc27"), model.motor.rated_speed_rpm)
+    t = derive_three_level(model)
+    cache_root().mkdir(parents=True, exist_ok=True)
+    with open(cache_root() / f"{model.prefix}.fwdata3l.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        lib = build_three_level_library(model, t, with_sim=True)
+    trace = run_closed_loop3(lib.ffi, lib.lib, model)
+    return _evenly_spaced(controller_inputs3(trace, model), n)
+
+
+# ---------------------------------------------------------------- topology adapter
+
+def _render2(model: Model, t: Any, target: str) -> dict[str, str]:
+    from .render import render_two_level
+
+    return render_two_level(model, t, target)
+
+
+def _render3(model: Model, t: Any, target: str) -> dict[str, str]:
+    from .threelevel.render import render_three_level
+
+    return render_three_level(model, t, target)
+
+
+def _step3(t: Any, x: np.ndarray) -> np.ndarray:
+    from .threelevel.reference import step_batch as step3
+
+    return step3(t, x)
+
+
+@dataclass(frozen=True)
+class Topology:
+    """What the firmware projects need of one inverter topology's controller."""
+
+    name: str  # model.inverter.topology
+    input_fields: tuple[Field, ...]
+    output_fields: tuple[Field, ...]
+    input_dtype: np.dtype
+    output_dtype: np.dtype
+    reference: str  # dotted name of the reference step (for generated comments)
+    step_batch: Callable[[Any, np.ndarray], np.ndarray]
+    render: Callable[[Model, Any, str], dict[str, str]]  # (model, tables, target) -> files
+    selftest_states: Callable[..., np.ndarray]  # (model, tables, n, seed)
+    trajectory_states: Callable[[Model, Any, int], np.ndarray]  # (model, tables, n)
+    trajectory_doc: str
+
+
+def _three_level() -> Topology:
+    from .threelevel import interface as i3
+
+    return Topology("t-type", i3.INPUT_FIELDS, i3.OUTPUT_FIELDS, i3.INPUT_DTYPE, i3.OUTPUT_DTYPE,
+                    "codegen.threelevel.reference.step_batch", _step3, _render3, _selftest_states3,
+                    _trajectory_states3, "states evenly spaced over the 27-MPDTC run at rated speed")
+
+
+TWO_LEVEL = Topology("two-level", INPUT_FIELDS, OUTPUT_FIELDS, INPUT_DTYPE, OUTPUT_DTYPE,
+                     "codegen.twolevel.reference.step_batch", step_batch, _render2, _selftest_states2,
+                     _trajectory_states2, "states evenly spaced over the closed-loop scenario")
+_TOPOLOGIES: dict[str, Callable[[], Topology]] = {"two-level": lambda: TWO_LEVEL, "t-type": _three_level}
+
+
+def topology_of(model: Model) -> Topology:
+    """The adapter of ``model.inverter.topology``."""
+    return _TOPOLOGIES[model.inverter.topology]()
+
+
+def _topology_of_tables(t: Any) -> Topology:
+    return TWO_LEVEL if isinstance(t, TwoLevelTables) else _three_level()
+
+
+def selftest_states(model: Model, t: Any, n: int, seed: int = SELFTEST_SEED) -> np.ndarray:
+    """``n`` deterministic self-test states of the model's topology (guard cases first)."""
+    return topology_of(model).selftest_states(model, t, n, seed)
+
+
+def trajectory_states(model: Model, t: Any, n: int) -> np.ndarray:
+    """``n`` states evenly spaced over the topology's recorded benchmark trajectory."""
+    return topology_of(model).trajectory_states(model, t, n)
+
+
+def expected_outputs(t: Any, states: np.ndarray) -> np.ndarray:
     """The reference's outputs; every float output must be finite (numerics.md)."""
-    out = step_batch(t, states)
-    for f in OUTPUT_FIELDS:
+    topo = _topology_of_tables(t)
+    out = topo.step_batch(t, states)
+    for f in topo.output_fields:
         if f.ctype == "float" and not np.all(np.isfinite(out[f.name])):
             raise ValueError(f"reference output {f.name} is not finite for some state (input guard bug)")
     return out
@@ -244,6 +410,7 @@ def record_dicts(records: np.ndarray, fields: tuple[Field, ...]) -> list[dict]:
     return [{f.name: cols[f.name][i] for f in fields} for i in range(len(records))]
 
 
-__all__ = ["INPUT_FIELDS", "OUTPUT_FIELDS", "SELFTEST_SEED", "Value", "flat_values", "canonical_bytes",
+__all__ = ["INPUT_FIELDS", "OUTPUT_FIELDS", "SELFTEST_SEED", "Topology", "TWO_LEVEL", "topology_of",
+           "guard_cases3", "Value", "flat_values", "canonical_bytes",
            "values_crc", "record_crcs", "guard_cases", "selftest_states", "trajectory_states",
            "expected_outputs", "record_dicts"]

@@ -20,19 +20,20 @@ import shutil
 import subprocess
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from . import __version__
 from .errors import MpcgenError
 from .f32 import c_float_literal
-from .fwdata import (SELFTEST_SEED, expected_outputs, flat_values, record_crcs, record_dicts,
-                     selftest_states, trajectory_states)
+from .fwdata import (SELFTEST_SEED, TWO_LEVEL, Topology, expected_outputs, flat_values, record_crcs,
+                     record_dicts, topology_of)
 from .model import Model
-from .render import environment, render_two_level
+from .render import environment
 from .resources import firmware_dir
 from .twolevel.derive import TwoLevelTables
-from .twolevel.interface import INPUT_DTYPE, INPUT_FIELDS, OUTPUT_DTYPE, OUTPUT_FIELDS
+from .twolevel.interface import INPUT_DTYPE, OUTPUT_DTYPE
 
 RUNTIME_FILES = ("main.c", "console.c", "console.h", "mpc_runtime.c", "mpc_runtime.h",
                  "selftest.c", "selftest.h", "port.h")
@@ -42,9 +43,20 @@ ARM_CFLAGS = ("-mcpu=cortex-m7", "-mthumb", "-mfpu=fpv5-d16", "-mfloat-abi=hard"
               "-ffunction-sections", "-fdata-sections", "-g")
 HOST_CFLAGS = ("-O2", "-ffp-contract=off", "-fno-math-errno", "-std=c99", "-Wall", "-Wextra",
                "-Wconversion", "-Wdouble-promotion", "-Werror", "-fstack-usage", "-g")
-#: Octets of one state with full expected outputs / with a CRC-32 instead.
+#: Octets of one two-level state with full expected outputs / with a CRC-32 instead
+#: (any topology: ``full_record(topo)`` / ``compact_record(topo)``).
 FULL_RECORD = INPUT_DTYPE.itemsize + OUTPUT_DTYPE.itemsize
 COMPACT_RECORD = INPUT_DTYPE.itemsize + 4
+
+
+def full_record(topo: Topology) -> int:
+    """Octets of one embedded state with its full expected outputs."""
+    return topo.input_dtype.itemsize + topo.output_dtype.itemsize
+
+
+def compact_record(topo: Topology) -> int:
+    """Octets of one embedded state with a CRC-32 of its expected outputs."""
+    return topo.input_dtype.itemsize + 4
 
 
 class FirmwareError(MpcgenError):
@@ -126,15 +138,17 @@ class TestSet:
     expected: np.ndarray
     dump: bool
     full: bool = True
+    topology: Topology = TWO_LEVEL
 
     def context(self) -> dict:
         """Values the template prints."""
+        topo = self.topology
         ctx = {"name": self.name, "doc": self.doc, "n": len(self.states), "dump": self.dump,
-               "full": self.full, "states": record_dicts(self.states, INPUT_FIELDS)}
+               "full": self.full, "states": record_dicts(self.states, topo.input_fields)}
         if self.full:
-            ctx["expected"] = record_dicts(self.expected, OUTPUT_FIELDS)
+            ctx["expected"] = record_dicts(self.expected, topo.output_fields)
         else:
-            ctx["expected_crc"] = record_crcs(self.expected, OUTPUT_FIELDS)
+            ctx["expected_crc"] = record_crcs(self.expected, topo.output_fields)
         return ctx
 
 
@@ -150,25 +164,27 @@ def c_value(value: float | int, ctype: str) -> str:
     return c_float_literal(v)
 
 
-def make_test_sets(model: Model, t: TwoLevelTables, n_selftest: int, n_bench: int,
+def make_test_sets(model: Model, t: Any, n_selftest: int, n_bench: int,
                    seed: int = SELFTEST_SEED) -> list[TestSet]:
     """The self-test set and (if n_bench > 0) the bench trajectory, with reference outputs."""
-    x = selftest_states(model, t, n_selftest, seed)
+    topo = topology_of(model)
+    x = topo.selftest_states(model, t, n_selftest, seed)
     sets = [TestSet("selftest", f"{len(x)} guard and random states (seed {seed})", x, expected_outputs(t, x),
-                    dump=False)]
+                    dump=False, topology=topo)]
     if n_bench > 0:
-        b = trajectory_states(model, t, n_bench)
-        sets.append(TestSet("bench", f"{len(b)} states evenly spaced over the closed-loop scenario",
-                            b, expected_outputs(t, b), dump=True))
+        b = topo.trajectory_states(model, t, n_bench)
+        sets.append(TestSet("bench", f"{len(b)} {topo.trajectory_doc}",
+                            b, expected_outputs(t, b), dump=True, topology=topo))
     return sets
 
 
 def _fit_budget(board: Board, sets: list[TestSet]) -> None:
     n = sum(len(s.states) for s in sets)
-    if board.data_budget is None or n * FULL_RECORD <= board.data_budget:
+    topo = sets[0].topology if sets else TWO_LEVEL
+    if board.data_budget is None or n * full_record(topo) <= board.data_budget:
         return
-    if n * COMPACT_RECORD > board.data_budget:
-        raise FirmwareError(f"{board.name}: {n} test states need {n * COMPACT_RECORD} octets even with "
+    if n * compact_record(topo) > board.data_budget:
+        raise FirmwareError(f"{board.name}: {n} test states need {n * compact_record(topo)} octets even with "
                             f"compact expected outputs, the board has {board.data_budget}: lower n_selftest")
     for s in sets:
         s.full = False
@@ -182,7 +198,7 @@ def _sources(board: Board, outdir: Path, prefix: str) -> list[str]:
     return srcs
 
 
-def write_firmware_project(model: Model, tables: TwoLevelTables, board: str, outdir: Path,
+def write_firmware_project(model: Model, tables: TwoLevelTables | Any, board: str, outdir: Path,
                            n_selftest: int = 10000, *, n_bench: int = 2000,
                            seed: int = SELFTEST_SEED) -> list[Path]:
     """Write a buildable firmware project for ``board`` into ``outdir``; return the files written.
@@ -191,15 +207,19 @@ def write_firmware_project(model: Model, tables: TwoLevelTables, board: str, out
     self-test states and the bench trajectory are embedded with the Python
     reference's outputs (compact per-state CRCs where the full records do not
     fit the board), and a Makefile (C2000: Makefile + build.sh) is written.
+    Either topology: ``model.inverter.topology`` picks the controller, the
+    records, the reference and the test states (``codegen.fwdata.Topology``);
+    ``tables`` are TwoLevelTables or ThreeLevelTables to match.
     """
     spec = board_spec(board)
+    topo = topology_of(model)
     if n_selftest < 1:
         raise FirmwareError(f"n_selftest must be >= 1, got {n_selftest}")
     outdir = Path(outdir)
     sets = make_test_sets(model, tables, n_selftest, n_bench, seed)
     _fit_budget(spec, sets)
     fw = firmware_dir()
-    files: dict[str, str] = {f"gen/{k}": v for k, v in render_two_level(model, tables, spec.profile).items()}
+    files: dict[str, str] = {f"gen/{k}": v for k, v in topo.render(model, tables, spec.profile).items()}
     for f in RUNTIME_FILES:
         files[f"firmware/runtime/{f}"] = (fw / "runtime" / f).read_text()
     for d in spec.port_dirs:
@@ -210,9 +230,10 @@ def write_firmware_project(model: Model, tables: TwoLevelTables, board: str, out
     env.filters["c_value"] = c_value
     ctx = {"model_name": model.name, "config_hash": model.config_hash(), "version": __version__,
            "board": spec.name, "strategy": tables.strategy, "prefix": model.prefix,
-           "input_fields": INPUT_FIELDS, "output_fields": OUTPUT_FIELDS,
-           "input_values": flat_values(INPUT_FIELDS), "output_values": flat_values(OUTPUT_FIELDS),
-           "input_bits": INPUT_DTYPE.itemsize * 8, "output_bits": OUTPUT_DTYPE.itemsize * 8,
+           "input_fields": topo.input_fields, "output_fields": topo.output_fields,
+           "input_values": flat_values(topo.input_fields), "output_values": flat_values(topo.output_fields),
+           "input_bits": topo.input_dtype.itemsize * 8, "output_bits": topo.output_dtype.itemsize * 8,
+           "reference": topo.reference,
            "states_doc": "; ".join(s.doc for s in sets),
            "sets": [s.context() for s in sets]}
     files["gen/mpc_values.h"] = env.get_template("firmware/values.h.j2").render(ctx)
