@@ -23,6 +23,7 @@ import numpy as np
 
 from ..f32 import f32
 from ..model import Model
+from ..units import GUARD_UNITS
 from ..trig import ANGLE_GUARD_RAD, sincos_constants
 from ..twolevel.derive import Const
 from . import candidates as cd
@@ -113,7 +114,7 @@ def _constants(model: Model) -> list[Const]:
     ts = c.dt_s
     out: list[Const] = [Const(*c) for c in sincos_constants()]
     for name, val in guard_limits(model).items():
-        out.append(Const(name, f32(val), name.rsplit("_", 1)[-1].lower(), "input guard limit"))
+        out.append(Const(name, f32(val), GUARD_UNITS.get(name, ""), "input guard limit"))
     out += [
         Const("INV_SQRT3", f32(1 / math.sqrt(3)), "", "Clarke: i_beta = (i_a + 2 i_b)/sqrt(3)"),
         Const("SQRT3_2", f32(math.sqrt(3) / 2), "", "inverse Clarke: i_b = -i_alpha/2 + sqrt(3)/2 i_beta"),
@@ -135,7 +136,7 @@ def _constants(model: Model) -> list[Const]:
         Const("LAMBDA_PSI", f32(c.lambda_psi_nm_per_wb), "N*m/Wb", "eq. (7) lambda1"),
         Const("LAMBDA_VO", f32(c.lambda_vo_nm_per_v), "N*m/V", "eq. (7) lambda2"),
         Const("TAN30", f32(math.tan(math.pi / 6)), "", "u* sector borders at 30 deg multiples"),
-        Const("TAN60", f32(math.tan(math.pi / 3)), "", ""),
+        Const("TAN60", f32(math.tan(math.pi / 3)), "", "tan(60 deg): sector borders"),
     ]
     return out
 

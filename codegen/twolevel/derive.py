@@ -14,6 +14,7 @@ import numpy as np
 
 from ..f32 import f32
 from ..model import Model
+from ..units import GUARD_UNITS
 from ..trig import ANGLE_GUARD_RAD, sincos_constants
 from . import vectors
 
@@ -80,7 +81,7 @@ def _constants(model: Model) -> list[Const]:
     m, c = model.motor, model.controller
     out: list[Const] = [Const(*c) for c in sincos_constants()]
     for name, v in guard_limits(model).items():
-        out.append(Const(name, f32(v), name.rsplit("_", 1)[-1].lower(), "input guard limit"))
+        out.append(Const(name, f32(v), GUARD_UNITS.get(name, ""), "input guard limit"))
     out += [
         Const("INV_SQRT3", f32(1 / math.sqrt(3)), "", "Clarke: i_beta = (i_a + 2 i_b)/sqrt(3)"),
         Const("LD_H", f32(m.ld_h), "H", "psi_d = Ld i_d + psi_f"),
@@ -92,7 +93,7 @@ def _constants(model: Model) -> list[Const]:
         Const("INV_TN", f32(1 / m.rated_torque_nm), "1/(N*m)", "cost: (Te - T*)/T_N"),
         Const("EPS_T_NM", f32(c.eps_t_nm), "N*m", "s1-s3: |dT| <= eps_T -> zero vector"),
         Const("TAN30", f32(math.tan(math.pi / 6)), "", "sector borders at 30 deg multiples"),
-        Const("TAN60", f32(math.tan(math.pi / 3)), "", ""),
+        Const("TAN60", f32(math.tan(math.pi / 3)), "", "tan(60 deg): sector borders"),
     ]
     if c.predictor == "flux-geometry":
         out += [
