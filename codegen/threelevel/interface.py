@@ -20,18 +20,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..twolevel.interface import Field
+from ..twolevel.interface import MOTOR_INPUT_FIELDS, Field
 
 #: segments per period (a virtual vector's 7-segment sequence)
 N_SEGMENTS = 7
 #: most costs a step evaluates: 19 voltage groups of 27-MPDTC (63-MPDTC: 3..7)
 N_MAX_EVAL = 19
 
-INPUT_FIELDS: tuple[Field, ...] = (
-    Field("ia_a", "float", 1, "sampled phase-a current, A"),
-    Field("ib_a", "float", 1, "sampled phase-b current, A"),
-    Field("theta_e_rad", "float", 1, "electrical rotor angle, rad (|x| <= angle guard)"),
-    Field("omega_e_rad_s", "float", 1, "electrical rotor speed, rad/s"),
+INPUT_FIELDS: tuple[Field, ...] = MOTOR_INPUT_FIELDS + (
     Field("uc1_v", "float", 1, "upper DC-link capacitor voltage, V"),
     Field("uc2_v", "float", 1, "lower DC-link capacitor voltage, V (Udc = uc1 + uc2, V_o = (uc1 - uc2)/2)"),
     Field("torque_ref_nm", "float", 1, "torque reference T*, N*m (speed-loop output)"),

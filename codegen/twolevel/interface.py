@@ -24,11 +24,15 @@ class Field:
     doc: str
 
 
-INPUT_FIELDS: tuple[Field, ...] = (
+#: Motor measurements every controller step takes first (both topologies).
+MOTOR_INPUT_FIELDS: tuple[Field, ...] = (
     Field("ia_a", "float", 1, "sampled phase-a current, A"),
     Field("ib_a", "float", 1, "sampled phase-b current, A"),
     Field("theta_e_rad", "float", 1, "electrical rotor angle, rad (|x| <= angle guard)"),
     Field("omega_e_rad_s", "float", 1, "electrical rotor speed, rad/s"),
+)
+
+INPUT_FIELDS: tuple[Field, ...] = MOTOR_INPUT_FIELDS + (
     Field("udc_v", "float", 1, "measured DC-link voltage, V"),
     Field("torque_ref_nm", "float", 1, "torque reference T*, N*m (speed-loop output)"),
     Field("sw_prev", "uint16_t", 1, "switching state applied in the current period, Sa*4+Sb*2+Sc"),
