@@ -30,7 +30,7 @@ def steady_model(model: Model, speed_rpm: float) -> Model:
 
 
 def load_step_model(model: Model) -> Model:
-    """Rated speed under the speed PI, load 0 -> rated torque at half the run."""
+    """Rated speed under the speed PI (the run starts at rated speed), load 0 -> rated torque at half the run."""
     d = max(model.scenario.duration_s, 0.2)
     sc = dataclasses.replace(model.scenario, speed_mode="mechanical", duration_s=d,
                              speed_ref_rpm=((0.0, model.motor.rated_speed_rpm),),
@@ -38,14 +38,15 @@ def load_step_model(model: Model) -> Model:
     return model.replace(scenario=sc)
 
 
-def _run(model: Model, log: Callable[[str], None], label: str):
+def _run(model: Model, log: Callable[[str], None], label: str, initial_speed_rpm: float = 0.0):
     from .simulate3l import run_closed_loop3
     from .threelevel.derive import derive_three_level
     from .threelevel.hostbuild import build_three_level_library
 
     lib = build_three_level_library(model, derive_three_level(model), with_sim=True)
     t0 = time.perf_counter()
-    trace = run_closed_loop3(lib.ffi, lib.lib, model, progress=lambda f: log(f"  {label} {f:5.0%}"))
+    trace = run_closed_loop3(lib.ffi, lib.lib, model, progress=lambda f: log(f"  {label} {f:5.0%}"),
+                             initial_speed_rpm=initial_speed_rpm)
     return trace, time.perf_counter() - t0
 
 
@@ -78,7 +79,8 @@ def run_three_level(model: Model, strategies: list[str], plots: Path | None = No
         runs.append(("load_step", load_step_model(variant), variant.motor.rated_speed_rpm))
         for key, m, speed in runs:
             log(f"simulate {model.name} / {s} / {key}: {m.scenario.duration_s:g} s")
-            trace, wall = _run(m, log, f"{s} {key}")
+            start = speed if key == "load_step" else 0.0  # steady runs: speed imposed anyway
+            trace, wall = _run(m, log, f"{s} {key}", initial_speed_rpm=start)
             met = three_level_metrics(trace, m)
             met["wall_s"] = wall
             met["periods_per_s"] = trace.n / wall if wall > 0 else 0.0

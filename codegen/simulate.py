@@ -240,8 +240,12 @@ def run_chunked(
     errors: dict[int, str],
     progress: Callable[[float], None] | None,
     chunk: int,
+    initial_speed_rad_s: float = 0.0,
 ) -> dict[str, np.ndarray]:
     """Drive ``<api>_init`` + ``<api>_run`` over the model's scenario, chunk by chunk.
+
+    ``initial_speed_rad_s``: mechanical speed of the plant at t = 0 (default
+    standstill), e.g. to start a load-step scenario at rated speed.
 
     ``fields`` maps each trace member to (dtype, values per period); a member
     with w > 1 values per period is returned with shape (n, w).  The returned
@@ -258,6 +262,7 @@ def run_chunked(
     where = f"{model.source or model.name}"
     if getattr(lib, f"{api}_init")(params, state) != 0:
         raise SimulationError(f"{where}: {errors[-1]}")
+    state.omega_m_rad_s = float(initial_speed_rad_s)
     run = getattr(lib, f"{api}_run")
 
     arrays: dict[str, np.ndarray] = {k: np.zeros(n * w, dtype=t) for k, (t, w) in fields.items()}

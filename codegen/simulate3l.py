@@ -17,6 +17,8 @@ firmware/runtime/sim3l_api.h.  Plant model and the V_o sign convention
 """
 from __future__ import annotations
 
+import math
+
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
@@ -193,6 +195,7 @@ def run_closed_loop3(
     *,
     chunk: int = DEFAULT_CHUNK,
     substep_max_s: float | None = None,
+    initial_speed_rpm: float = 0.0,
 ) -> Trace3:
     """Run the model's scenario through the compiled three-level loop.
 
@@ -202,7 +205,8 @@ def run_closed_loop3(
     Raises :class:`SimulationError` on refused parameters or divergence.
     """
     params = params_from_model3(ffi, model, substep_max_s)
-    arrays = run_chunked(ffi, lib, "sim3l", model, params, _FIELDS, _RUN_ERRORS, progress, chunk)
+    arrays = run_chunked(ffi, lib, "sim3l", model, params, _FIELDS, _RUN_ERRORS, progress, chunk,
+                         initial_speed_rad_s=initial_speed_rpm * 2.0 * math.pi / 60.0)
     return Trace3(dt_s=float(model.controller.dt_s), udc_v=float(model.inverter.udc_v), **arrays)
 
 
