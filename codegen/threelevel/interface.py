@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..twolevel.interface import MOTOR_INPUT_FIELDS, Field
+from ..twolevel.interface import MOTOR_INPUT_FIELDS, Field, record_dtype
 
 #: segments per period (a virtual vector's 7-segment sequence)
 N_SEGMENTS = 7
@@ -73,14 +73,6 @@ FAULT = {name: bit for name, bit, _ in FAULT_BITS}
 #: safe decision on a tripped guard: OOO for the whole period
 SAFE_STATE = 13
 
-_NP = {"float": np.float32, "uint16_t": np.uint16}
-
-
-def _dtype(fields: tuple[Field, ...]) -> np.dtype:
-    spec = [(f.name, _NP[f.ctype], (f.length,)) if f.length > 1 else (f.name, _NP[f.ctype]) for f in fields]
-    return np.dtype(spec, align=True)
-
-
 #: numpy records laid out exactly like the C structs (checked against cffi at build time).
-INPUT_DTYPE: np.dtype = _dtype(INPUT_FIELDS)
-OUTPUT_DTYPE: np.dtype = _dtype(OUTPUT_FIELDS)
+INPUT_DTYPE: np.dtype = record_dtype(INPUT_FIELDS)
+OUTPUT_DTYPE: np.dtype = record_dtype(OUTPUT_FIELDS)

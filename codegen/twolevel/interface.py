@@ -71,11 +71,12 @@ FAULT = {name: bit for name, bit, _ in FAULT_BITS}
 _NP = {"float": np.float32, "uint16_t": np.uint16}
 
 
-def _dtype(fields: tuple[Field, ...]) -> np.dtype:
+def record_dtype(fields: tuple[Field, ...]) -> np.dtype:
+    """numpy structured dtype laid out like the C struct of ``fields`` (natural alignment)."""
     spec = [(f.name, _NP[f.ctype], (f.length,)) if f.length > 1 else (f.name, _NP[f.ctype]) for f in fields]
     return np.dtype(spec, align=True)
 
 
 #: numpy records laid out exactly like the C structs (checked against cffi at build time).
-INPUT_DTYPE: np.dtype = _dtype(INPUT_FIELDS)
-OUTPUT_DTYPE: np.dtype = _dtype(OUTPUT_FIELDS)
+INPUT_DTYPE: np.dtype = record_dtype(INPUT_FIELDS)
+OUTPUT_DTYPE: np.dtype = record_dtype(OUTPUT_FIELDS)
