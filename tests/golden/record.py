@@ -1,0 +1,106 @@
+"""Record the golden controller outputs and simulation metrics (run by hand, once).
+
+The golden files pin the behaviour of every example config and strategy
+across refactorings: ``tests/test_golden.py`` recomputes them with the
+Python reference and the compiled C and demands equal bits.
+
+    .venv/bin/python tests/golden/record.py
+
+Writes ``controller_<config>.npz`` (per strategy: input and output record
+fields, keys ``<strategy>/in/<field>`` and ``<strategy>/out/<field>``) and
+``simulate_<config>.json`` (the ``mpcgen simulate`` JSON without wall times).
+"""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent.parent
+CONFIGS = ("seed001_spmsm", "seed001_ipmsm", "seed000_tlevel")
+N_CLOSED, N_ADV, N_RANDOM = 1000, 1500, 1500
+VOLATILE = ("wall_s", "periods_per_s", "plots", "versions")
+
+
+def _strip(d: object) -> object:
+    if isinstance(d, dict):
+        return {k: _strip(v) for k, v in d.items() if k not in VOLATILE}
+    if isinstance(d, list):
+        return [_strip(v) for v in d]
+    return d
+
+
+def _spaced(x: np.ndarray, n: int) -> np.ndarray:
+    idx = np.linspace(0, len(x) - 1, num=min(n, len(x))).round().astype(np.intp)
+    return x[idx]
+
+
+def record_controller(name: str) -> None:
+    from codegen.config import load_config
+
+    base = load_config(ROOT / "examples" / f"{name}.toml")
+    arrays: dict[str, np.ndarray] = {}
+    if base.inverter.topology == "t-type":
+        from codegen.threelevel import reference
+        from codegen.threelevel.derive import derive_three_level
+        from codegen.threelevel.hostbuild import build_three_level_library
+        from codegen.threelevel.states import adversarial_states, random_states
+        from codegen.threelevel.verify import closed_loop_states
+
+        strategies = ("mpdtc27", "mpdtc63")
+        for s in strategies:
+            m = base.with_controller(strategy=s)
+            t = derive_three_level(m)
+            lib = build_three_level_library(m, t, with_sim=True)
+            x = np.concatenate([_spaced(closed_loop_states(m, lib), N_CLOSED),
+                                adversarial_states(m, t, n_target=N_ADV)[:N_ADV],
+                                random_states(m, N_RANDOM, seed=5)])
+            ref, got = reference.step_batch(t, x), lib.step_batch(x)
+            assert ref.tobytes() == got.tobytes(), f"{name}/{s}: C and reference differ"
+            _store(arrays, s, x, ref)
+    else:
+        from codegen.hostbuild import build_host_library
+        from codegen.twolevel import reference
+        from codegen.twolevel.states import adversarial_states, random_states
+        from codegen.twolevel.switch_tables import tables_for
+        from codegen.verify import closed_loop_states
+
+        for s in ("conventional", "s1", "s2", "s3"):
+            m = base.with_controller(strategy=s)
+            t = tables_for(m)
+            lib = build_host_library(m, t, with_sim=True)
+            x = np.concatenate([_spaced(closed_loop_states(m, lib), N_CLOSED),
+                                adversarial_states(m, t, reference.step_batch, n_target=N_ADV)[:N_ADV],
+                                random_states(m, N_RANDOM, seed=5)])
+            ref, got = reference.step_batch(t, x), lib.step_batch(x)
+            assert ref.tobytes() == got.tobytes(), f"{name}/{s}: C and reference differ"
+            _store(arrays, s, x, ref)
+    np.savez_compressed(HERE / f"controller_{name}.npz", **arrays)
+
+
+def _store(arrays: dict[str, np.ndarray], strategy: str, x: np.ndarray, out: np.ndarray) -> None:
+    for f in x.dtype.names or ():
+        arrays[f"{strategy}/in/{f}"] = np.ascontiguousarray(x[f])
+    for f in out.dtype.names or ():
+        arrays[f"{strategy}/out/{f}"] = np.ascontiguousarray(out[f])
+
+
+def record_simulate(name: str) -> None:
+    out = HERE / f"simulate_{name}.json"
+    tmp = HERE / f".tmp_{name}.json"
+    subprocess.run([sys.executable, "-m", "codegen.cli", "simulate", str(ROOT / "examples" / f"{name}.toml"),
+                    "--json", str(tmp), "-q"], check=True, stdout=subprocess.DEVNULL)
+    data = _strip(json.loads(tmp.read_text()))
+    tmp.unlink()
+    out.write_text(json.dumps(data, indent=1, sort_keys=True) + "\n")
+
+
+if __name__ == "__main__":
+    for cfg in CONFIGS:
+        print("recording", cfg, flush=True)
+        record_controller(cfg)
+        record_simulate(cfg)
