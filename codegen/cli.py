@@ -12,15 +12,12 @@ import time
 from pathlib import Path
 from typing import Callable, Sequence
 
-from . import __version__
-from .errors import ConfigError, MpcgenError
-from .model import THREE_LEVEL_STRATEGIES, TWO_LEVEL_STRATEGIES, Model
+from codegen import __version__
+from codegen.errors import ConfigError, MpcgenError, UsageError
+from codegen.model import Model
+from codegen.topology import topology_of
 
 EXIT_OK, EXIT_FAIL, EXIT_BAD_INPUT = 0, 1, 2
-
-
-class UsageError(MpcgenError):
-    """A command-line argument is invalid (exit code 2)."""
 
 
 def _err(msg: str) -> None:
@@ -51,7 +48,7 @@ def _add_config_args(p: argparse.ArgumentParser, target: bool = False) -> None:
 
 
 def _load(args: argparse.Namespace) -> Model:
-    from .config import load_config, parse_override
+    from codegen.config import load_config, parse_override
 
     overrides: dict[str, object] = {}
     for text in args.sets:
@@ -67,7 +64,7 @@ def _load(args: argparse.Namespace) -> Model:
 
 
 def _strategies(args: argparse.Namespace, model: Model) -> list[str]:
-    family = TWO_LEVEL_STRATEGIES if model.inverter.topology == "two-level" else THREE_LEVEL_STRATEGIES
+    family = topology_of(model).strategies
     if getattr(args, "strategies", None):
         chosen = [s.strip() for s in args.strategies.split(",") if s.strip()]
         for s in chosen:
@@ -85,7 +82,7 @@ def _write_json(path: str | None, data: dict) -> None:
 
 # ---------------------------------------------------------------- generate
 def cmd_generate(args: argparse.Namespace) -> int:
-    from .generate import generate
+    from codegen.stages.generate import generate
 
     model = _load(args)
     log = _log(args.quiet)
@@ -97,7 +94,7 @@ def cmd_generate(args: argparse.Namespace) -> int:
 
 # ---------------------------------------------------------------- verify
 def cmd_verify(args: argparse.Namespace) -> int:
-    from .verify import StrategyResult, verify_strategy
+    from codegen.stages.verify import verify_strategy
 
     model = _load(args)
     if args.states < 1:
@@ -107,12 +104,7 @@ def cmd_verify(args: argparse.Namespace) -> int:
     for s in _strategies(args, model):
         variant = model.with_controller(strategy=s)
         log(f"verify {model.name} / {s}: building and comparing {args.states} states")
-        if model.inverter.topology == "t-type":
-            from .threelevel.verify import verify_three_level
-
-            r = StrategyResult(**verify_three_level(variant, args.states, log=log, closed_loop=not args.no_closed_loop))
-        else:
-            r = verify_strategy(variant, args.states, log=log, closed_loop=not args.no_closed_loop)
+        r = verify_strategy(variant, args.states, log=log, closed_loop=not args.no_closed_loop)
         results.append(r)
         print(f"{s:12s} states {r.states:>9d}  mismatches {r.mismatches}  ({r.states_per_s:,.0f} states/s, "
               f"closed-loop {r.sources.get('closed_loop', 0)}, adversarial {r.sources['adversarial']}, "
@@ -128,18 +120,13 @@ def cmd_verify(args: argparse.Namespace) -> int:
 
 # ---------------------------------------------------------------- simulate
 def cmd_simulate(args: argparse.Namespace) -> int:
-    from .runs import run_scenarios, run_threshold_sweep
-
     model = _load(args)
     log = _log(args.quiet)
+    topo = topology_of(model)
     if args.sweep_eps:
-        data = run_threshold_sweep(model, args.sweep_eps, log=log)
-    elif model.inverter.topology == "t-type":
-        from .runs3l import run_three_level
-
-        data = run_three_level(model, _strategies(args, model), plots=Path(args.plots) if args.plots else None, log=log)
+        data = topo.sweep_eps(model, args.sweep_eps, log=log)
     else:
-        data = run_scenarios(model, _strategies(args, model), plots=Path(args.plots) if args.plots else None, log=log)
+        data = topo.simulate(model, _strategies(args, model), Path(args.plots) if args.plots else None, log=log)
     print(data.pop("_table"))
     _write_json(args.json, data)
     return EXIT_OK
@@ -147,16 +134,14 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
 # ---------------------------------------------------------------- tables
 def cmd_tables(args: argparse.Namespace) -> int:
-    from .tables_cmd import tables_text
-
     model = _load(args)
-    print(tables_text(model, args.utilisation, log=_log(args.quiet)))
+    print(topology_of(model).tables_text(model, args.utilisation, log=_log(args.quiet)))
     return EXIT_OK
 
 
 # ---------------------------------------------------------------- bench
 def cmd_bench(args: argparse.Namespace) -> int:
-    from .bench import bench
+    from codegen.stages.bench import bench
 
     model = _load(args)
     data = bench(model, _strategies(args, model), emulated=args.emulated, repeats=args.repeats, log=_log(args.quiet))
@@ -167,13 +152,12 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
 # ---------------------------------------------------------------- firmware
 def cmd_firmware(args: argparse.Namespace) -> int:
-    from .fwproject import BOARDS, write_firmware_project
-    from .twolevel.switch_tables import tables_for
+    from codegen.stages.firmware import BOARDS, write_firmware_project
 
     model = _load(args)
     if args.board not in BOARDS:
         raise UsageError(f"--board = {args.board!r}: unknown board; allowed: {', '.join(BOARDS)}")
-    paths = write_firmware_project(model, tables_for(model), args.board, Path(args.output))
+    paths = write_firmware_project(model, topology_of(model).derive(model), args.board, Path(args.output))
     print(f"wrote {len(paths)} files to {args.output}; build with: make -C {args.output}")
     return EXIT_OK
 

@@ -32,8 +32,7 @@ from codegen.model import (
     PREDICTORS,
     TABLE_SOURCES,
     TARGETS,
-    THREE_LEVEL_STRATEGIES,
-    TWO_LEVEL_STRATEGIES,
+    STRATEGIES_BY_TOPOLOGY,
     Controller,
     Derivation,
     Inverter,
@@ -50,7 +49,7 @@ __all__ = ["load_config", "parse_override", "SCHEMA", "Spec", "Interval", "Ref"]
 #: ``ConfigError.file`` for errors in command-line ``--set`` strings.
 COMMAND_LINE = "(command line)"
 
-STRATEGIES: tuple[str, ...] = TWO_LEVEL_STRATEGIES + THREE_LEVEL_STRATEGIES
+STRATEGIES: tuple[str, ...] = tuple(s for group in STRATEGIES_BY_TOPOLOGY.values() for s in group)
 
 # C keywords (C89..C23) plus the common ``asm`` extension: a prefix equal to
 # one of these would still be a valid symbol prefix ("int_step"), but it is
@@ -450,13 +449,10 @@ def _check_predictor_geometry(ck: _Checker) -> None:
 def _check_topology(ck: _Checker) -> None:
     v = ck.values
     strategy, topology = v["controller.strategy"], v["inverter.topology"]
-    needed, fitting = (
-        ("two-level", TWO_LEVEL_STRATEGIES)
-        if strategy in TWO_LEVEL_STRATEGIES
-        else ("t-type", THREE_LEVEL_STRATEGIES)
-    )
+    needed = next(t for t, group in STRATEGIES_BY_TOPOLOGY.items() if strategy in group)
+    fitting = STRATEGIES_BY_TOPOLOGY[needed]
     if topology != needed:
-        others = THREE_LEVEL_STRATEGIES if needed == "two-level" else TWO_LEVEL_STRATEGIES
+        others = STRATEGIES_BY_TOPOLOGY[str(topology)]
         ck.fail(
             "controller.strategy",
             strategy,
@@ -468,7 +464,7 @@ def _check_topology(ck: _Checker) -> None:
 
 def _check_three_level_motor(ck: _Checker) -> None:
     v = ck.values
-    if v["controller.strategy"] in THREE_LEVEL_STRATEGIES and v["motor.ld_h"] != v["motor.lq_h"]:
+    if v["inverter.topology"] == "t-type" and v["motor.ld_h"] != v["motor.lq_h"]:
         ck.fail(
             "controller.strategy",
             v["controller.strategy"],

@@ -8,7 +8,7 @@ offending value and what would have been allowed, as the spec requires
 """
 from __future__ import annotations
 
-__all__ = ["MpcgenError", "ConfigError", "Marker", "MISSING", "FILE_FIELD"]
+__all__ = ["MpcgenError", "ConfigError", "UsageError", "Unsupported", "Marker", "MISSING", "FILE_FIELD"]
 
 #: ``ConfigError.field`` for problems with the file as a whole (missing,
 #: unreadable, not TOML).
@@ -69,3 +69,11 @@ def _show(value: object) -> str:
     if len(text) > _MAX_VALUE_CHARS:
         text = text[: _MAX_VALUE_CHARS - 3] + "..."
     return text
+
+
+class UsageError(MpcgenError):
+    """A command-line argument is invalid (exit code 2)."""
+
+
+class Unsupported(UsageError):
+    """The command or option does not apply to the config's topology or strategy (exit code 2)."""

@@ -22,20 +22,15 @@ from typing import Any
 
 import cffi
 
-from .errors import MpcgenError
-from .model import Model
-from .render import environment, render_two_level, two_level_context, write_files
-from .resources import firmware_dir
-from .twolevel.derive import TwoLevelTables
-from .twolevel.interface import INPUT_DTYPE, INPUT_FIELDS, OUTPUT_DTYPE, OUTPUT_FIELDS
+from codegen.errors import MpcgenError
+from codegen.records import RecordLayout
+from codegen.render import write_files
 
 #: Flags every build of generated C uses (README "Standards", numerics.md).
 STRICT_CFLAGS: tuple[str, ...] = (
     "-std=c99", "-O2", "-Wall", "-Wextra", "-Wconversion", "-Wdouble-promotion", "-Werror",
     "-ffp-contract=off", "-fno-math-errno",
 )
-SIM_SOURCES = ("runtime/pmsm_dq.c", "runtime/speed_pi.c", "runtime/plant2l.c", "runtime/sim2l.c")
-SIM_API = "runtime/sim2l_api.h"
 
 
 class BuildError(MpcgenError):
@@ -44,15 +39,19 @@ class BuildError(MpcgenError):
 
 @dataclass(frozen=True)
 class Records:
-    """The step's input/output records: field lists and matching numpy dtypes."""
+    """The step's input and output records, bound to the step's number format."""
 
-    input_fields: tuple
-    output_fields: tuple
-    input_dtype: Any
-    output_dtype: Any
+    input: RecordLayout
+    output: RecordLayout
 
 
-TWO_LEVEL_RECORDS = Records(INPUT_FIELDS, OUTPUT_FIELDS, INPUT_DTYPE, OUTPUT_DTYPE)
+@dataclass(frozen=True)
+class SimSources:
+    """The closed-loop simulator compiled beside the step: cffi API header, C sources, other headers."""
+
+    api: Path
+    sources: tuple[Path, ...]
+    headers: tuple[Path, ...]
 
 
 @dataclass(frozen=True)
@@ -64,14 +63,14 @@ class HostLib:
     build_dir: Path
     prefix: str
     has_sim: bool
-    records: Records = TWO_LEVEL_RECORDS
+    records: Records
 
     def step_batch(self, states: Any) -> Any:
         """Run the compiled step over an array of input records; return output records."""
         import numpy as np
 
-        states = np.ascontiguousarray(states, dtype=self.records.input_dtype)
-        out = np.zeros(len(states), self.records.output_dtype)
+        states = np.ascontiguousarray(states, dtype=self.records.input.dtype)
+        out = np.zeros(len(states), self.records.output.dtype)
         fn = getattr(self.lib, f"{self.prefix}_step_batch")
         pin = self.ffi.cast(f"{self.prefix}_input_t *", self.ffi.from_buffer(states))
         pout = self.ffi.cast(f"{self.prefix}_output_t *", self.ffi.from_buffer(out))
@@ -101,31 +100,17 @@ def compile_object(src: Path, obj: Path, include_dirs: list[Path], extra: tuple[
         raise BuildError(f"compiling {src.name} failed:\n{' '.join(cmd)}\n{r.stderr}")
 
 
-def _cdef(model: Model, t: TwoLevelTables) -> str:
-    ctx = two_level_context(model, t, "host")
-    return environment().get_template("twolevel/cdef.h.j2").render(ctx)
-
-
-def build_host_library(model: Model, t: TwoLevelTables, with_sim: bool = True) -> HostLib:
-    """Two-level: render the host profile (+ the closed-loop simulator), build, load."""
-    files = render_two_level(model, t, "host")
-    sim = (SIM_API, SIM_SOURCES, ("runtime/plant2l.h", "runtime/pmsm_dq.h", "runtime/speed_pi.h")) if with_sim else None
-    return build_library(model.prefix, "_mpc", files, _cdef(model, t), TWO_LEVEL_RECORDS, sim)
-
-
 def build_library(prefix: str, tag: str, files: dict[str, str], cdef: str, records: Records,
-                  sim: tuple[str, tuple[str, ...], tuple[str, ...]] | None = None) -> HostLib:
-    """Compile the rendered step (+ optional runtime sources), link with cffi, load.
+                  sim: SimSources | None = None) -> HostLib:
+    """Compile the rendered step (+ the optional closed-loop simulator), link with cffi, load.
 
-    ``sim`` = (cdef-parsable API header, C sources, other headers), paths
-    relative to the firmware directory.  Cached by a hash of every input byte.
+    Cached by a hash of every input byte.
     """
-    fw = firmware_dir()
-    api = (fw / sim[0]).read_text() if sim else ""
+    api = sim.api.read_text() if sim else ""
     key_src = [cdef, api, " ".join(STRICT_CFLAGS), cffi.__version__, sys.version]
     key_src += [files[k] for k in sorted(files)]
     if sim:
-        key_src += [(fw / s).read_text() for s in (*sim[1], *sim[2])]
+        key_src += [p.read_text() for p in (*sim.sources, *sim.headers)]
     key = hashlib.sha256("\0".join(key_src).encode()).hexdigest()[:16]
     modname = f"{tag}_{prefix}_{key}"
     bdir = cache_root() / modname
@@ -136,16 +121,17 @@ def build_library(prefix: str, tag: str, files: dict[str, str], cdef: str, recor
         shutil.rmtree(tmp, ignore_errors=True)
         tmp.mkdir(parents=True)
         write_files(files, tmp)
-        sources = [tmp / f"{prefix}_mpc.c"] + ([fw / s for s in sim[1]] if sim else [])
+        sources = [tmp / f"{prefix}_mpc.c"] + (list(sim.sources) if sim else [])
+        incdirs = [tmp] + (sorted({p.parent for p in (*sim.sources, *sim.headers)}) if sim else [])
         objs = []
         for src in sources:
             obj = tmp / (src.stem + ".o")
-            compile_object(src, obj, [tmp, fw / "runtime"])
+            compile_object(src, obj, incdirs)
             objs.append(str(obj))
         ffi = cffi.FFI()
         ffi.cdef(cdef + "\n" + api)
-        includes = '#include "mpc_binding.h"\n' + (f'#include "{Path(sim[0]).name}"\n' if sim else "")
-        ffi.set_source(modname, includes, include_dirs=[str(tmp), str(fw / "runtime")],
+        includes = '#include "mpc_binding.h"\n' + (f'#include "{sim.api.name}"\n' if sim else "")
+        ffi.set_source(modname, includes, include_dirs=[str(d) for d in incdirs],
                        extra_objects=objs, libraries=["m"])
         try:
             ffi.compile(tmpdir=str(tmp), verbose=False)
@@ -185,10 +171,10 @@ def _load(modname: str, path: Path) -> ModuleType:
 def _check_layout(lib: HostLib) -> None:
     """The numpy records must match the C structs byte for byte."""
     ffi, p, r = lib.ffi, lib.prefix, lib.records
-    for ctype, dtype, fields in ((f"{p}_input_t", r.input_dtype, r.input_fields),
-                                 (f"{p}_output_t", r.output_dtype, r.output_fields)):
+    for ctype, layout in ((f"{p}_input_t", r.input), (f"{p}_output_t", r.output)):
+        dtype = layout.dtype
         if ffi.sizeof(ctype) != dtype.itemsize:
             raise BuildError(f"{ctype}: C size {ffi.sizeof(ctype)} != numpy {dtype.itemsize}")
-        for f in fields:
+        for f in layout.fields:
             if ffi.offsetof(ctype, f.name) != dtype.fields[f.name][1]:
                 raise BuildError(f"{ctype}.{f.name}: C offset differs from numpy")

@@ -1,4 +1,4 @@
-"""Metrics of closed-loop two-level runs, with the names of seed 001.
+"""Metrics of closed-loop runs shared by every topology, with the names of seed 001.
 
 Definitions (shared/spec/plant-and-metrics.md "Metrics"; seed 001 = Li Yaohua
 et al., Control Theory & Applications 40(10), 2023, eq. (7)-(10)):
@@ -22,14 +22,11 @@ Everything is vectorised numpy; nothing loops over samples in Python.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
-from .model import Model
-
-if TYPE_CHECKING:  # pragma: no cover
-    from .simulate import Trace
+from codegen.model import Model
 
 __all__ = [
     "steady_windows",
@@ -43,14 +40,16 @@ __all__ = [
     "f_ave_hz",
     "cal_ave",
     "thd_window",
-    "two_level_metrics",
+    "fundamental_hz",
+    "ripple_summary",
+    "sample_time",
 ]
 
 # Tolerance, in samples / periods, for mapping times onto the sample grid.
-_TOL = 1e-6
+GRID_TOL = 1e-6
 
 
-def _t(k: int, dt_s: float) -> float:
+def sample_time(k: int, dt_s: float) -> float:
     """Time of sample k for reports (k*dt_s without float noise: 3.8, not 3.8000000000000003)."""
     return round(k * dt_s, 12)
 
@@ -89,8 +88,8 @@ def steady_windows(model: Model, window_s: float = 0.2) -> list[tuple[float, flo
 
 def window_slice(dt_s: float, t0: float, t1: float, n: int | None = None) -> slice:
     """Samples k with t0 <= k*dt_s < t1 (grid-tolerant), clipped to n samples."""
-    k0 = max(0, math.ceil(t0 / dt_s - _TOL))
-    k1 = max(k0, math.ceil(t1 / dt_s - _TOL))
+    k0 = max(0, math.ceil(t0 / dt_s - GRID_TOL))
+    k1 = max(k0, math.ceil(t1 / dt_s - GRID_TOL))
     if n is not None:
         k0, k1 = min(k0, n), min(k1, n)
     return slice(k0, k1)
@@ -167,7 +166,7 @@ def amplitude_spectrum(
     sl = window_slice(dt_s, t0, t1, x.shape[0])
     avail = sl.stop - sl.start
     per_period = 1.0 / (f1_hz * dt_s)  # samples per fundamental period
-    n_per = int(math.floor(avail / per_period + _TOL))
+    n_per = int(math.floor(avail / per_period + GRID_TOL))
     if n_per < 1:
         raise ValueError(
             f"window [{t0}, {t1}) s holds {avail} samples, less than one fundamental "
@@ -182,8 +181,8 @@ def amplitude_spectrum(
         amp[-1] *= 0.5  # Nyquist bin
     freqs = np.fft.rfftfreq(m, dt_s)
     info = {
-        "t0_s": _t(sl.start, dt_s),
-        "t1_s": _t(sl.start + m, dt_s),
+        "t0_s": sample_time(sl.start, dt_s),
+        "t1_s": sample_time(sl.start + m, dt_s),
         "n_samples": m,
         "n_periods": n_per,
         "f1_hz": float(f1_hz),
@@ -209,7 +208,7 @@ def thd(
     n_per = info["n_periods"]
     nbins = amp.shape[0]
     f_lim = min(f_max_hz, 0.5 / dt_s)
-    h_max = int(math.floor(f_lim / info["f1_used_hz"] + _TOL))
+    h_max = int(math.floor(f_lim / info["f1_used_hz"] + GRID_TOL))
     h_max = min(h_max, (nbins - 1) // n_per)
     i1 = float(amp[n_per])
     harm = amp[n_per * np.arange(2, h_max + 1)] if h_max >= 2 else np.zeros(0)
@@ -257,7 +256,7 @@ def cal_ave(n_eval: Any) -> float:
 # ---------------------------------------------------------------------------
 # all two-level metrics of one run
 # ---------------------------------------------------------------------------
-def thd_window(trace: "Trace", model: Model, window_s: float = 0.2) -> tuple[float, float] | None:
+def thd_window(trace: Any, model: Model, window_s: float = 0.2) -> tuple[float, float] | None:
     """The last steady window whose speed reference is nonzero (None if there is none)."""
     for t0, t1 in reversed(steady_windows(model, window_s)):
         sl = window_slice(trace.dt_s, t0, t1, trace.n)
@@ -266,7 +265,7 @@ def thd_window(trace: "Trace", model: Model, window_s: float = 0.2) -> tuple[flo
     return None
 
 
-def _f1_hz(trace: "Trace", model: Model, t0: float, t1: float) -> float:
+def fundamental_hz(trace: Any, model: Model, t0: float, t1: float) -> float:
     """Fundamental of the phase currents: mean |omega_e| over the window / (2*pi)."""
     sl = window_slice(trace.dt_s, t0, t1, trace.n)
     w_e = model.motor.pole_pairs * float(np.mean(np.abs(trace.omega_m_rad_s[sl])))
@@ -288,116 +287,4 @@ def ripple_summary(trace: Any, psi_ref: Any, run_mask: Any, rip_mask: Any) -> di
         "T_rip_pp": t_stats["pp"],
         "psi_rip_std": p_stats["std"],
         "psi_rip_pp": p_stats["pp"],
-    }
-
-
-def two_level_metrics(
-    trace: "Trace",
-    model: Model,
-    stats_window: tuple[float, float] | None = None,
-    window_s: float = 0.2,
-    f_max_hz: float = 10e3,
-) -> dict[str, Any]:
-    """The seed-001 metric set of one closed-loop run (JSON-ready values).
-
-    Windows (stated in the result under ``window``):
-
-    * ``T_rip_RMSE``, ``psi_rip_RMSE`` (eq. (7)-(8)), ``f_ave_hz`` (eq. (9))
-      and ``Cal_ave`` (eq. (10)): over the whole run, as the seed's Tables 2
-      and 9 do (n = all samples, t = the simulated time), or over
-      ``stats_window`` = (t0, t1) when given.
-    * ``T_rip_std``, ``T_rip_pp``, ``psi_rip_std``, ``psi_rip_pp``: ripple of
-      the error about its mean, over the steady windows (the last
-      ``window_s`` of each constant-reference segment, :func:`steady_windows`),
-      so that start-up and reversal transients do not dominate them; or over
-      ``stats_window`` when given.
-    * ``THD_ia`` (percent): over the last steady window with a nonzero speed
-      reference (:func:`thd_window`), f1 from the mean electrical speed there,
-      harmonics up to ``f_max_hz``; NaN (with the reason) if there is none.
-
-    ``steady`` lists the ripple statistics of each steady window.
-    """
-    dt, n = trace.dt_s, trace.n
-    psi_ref = float(model.controller.psi_ref_wb)
-    windows = steady_windows(model, window_s)
-
-    if stats_window is None:
-        run_mask = None
-        run_desc = {
-            "t0_s": 0.0,
-            "t1_s": _t(n, dt),
-            "n_samples": n,
-            "description": "whole run, as seed 001 eq. (7)-(10) (n = all samples, t = simulated time)",
-        }
-        rip_mask = window_mask(n, dt, windows)
-        rip_desc = {
-            "windows_s": [[a, b] for a, b in windows],
-            "n_samples": int(np.count_nonzero(rip_mask)),
-            "description": f"steady windows: last {window_s:g} s of each constant-reference segment",
-        }
-        sw_run, n_eval_run, t_run, sw0 = trace.sw_applied, trace.n_eval, n * dt, 0
-    else:
-        sl = window_slice(dt, stats_window[0], stats_window[1], n)
-        run_mask = np.zeros(n, dtype=bool)
-        run_mask[sl] = True
-        run_desc = {
-            "t0_s": _t(sl.start, dt),
-            "t1_s": _t(sl.stop, dt),
-            "n_samples": sl.stop - sl.start,
-            "description": "window given by the caller",
-        }
-        rip_mask = run_mask
-        rip_desc = dict(run_desc)
-        sw_run, n_eval_run, t_run = trace.sw_applied[sl], trace.n_eval[sl], (sl.stop - sl.start) * dt
-        sw0 = int(trace.sw_applied[sl.start - 1]) if sl.start > 0 else 0
-
-
-    thd_value = math.nan
-    thd_info: dict[str, Any]
-    tw = thd_window(trace, model, window_s)
-    if tw is None:
-        thd_info = {"description": "no steady window with a nonzero speed reference"}
-    else:
-        try:
-            thd_value, thd_info = thd(trace.ia_a, dt, tw[0], tw[1], _f1_hz(trace, model, *tw), f_max_hz)
-            thd_info["description"] = (
-                f"i_a over the last steady window with nonzero speed [{tw[0]:g}, {tw[1]:g}) s, "
-                f"{thd_info['n_periods']} fundamental periods, harmonics "
-                f"{thd_info['harmonics'][0]}..{thd_info['harmonics'][1]}"
-            )
-        except ValueError as exc:
-            thd_info = {"description": f"THD not computed: {exc}", "window_s": list(tw)}
-
-    steady = []
-    for a, b in windows:
-        m = window_mask(n, dt, (a, b))
-        ts = ripple_stats(trace.te_nm, trace.torque_ref_nm, m)
-        ps = ripple_stats(trace.psi_wb, psi_ref, m)
-        steady.append(
-            {
-                "t0_s": a,
-                "t1_s": b,
-                "T_rip_RMSE": ts["rmse"],
-                "T_rip_std": ts["std"],
-                "T_rip_pp": ts["pp"],
-                "psi_rip_RMSE": ps["rmse"],
-                "psi_rip_std": ps["std"],
-                "psi_rip_pp": ps["pp"],
-            }
-        )
-
-    return {
-        **ripple_summary(trace, psi_ref, run_mask, rip_mask),
-        "THD_ia": thd_value,
-        "f_ave_hz": f_ave_hz(sw_run, t_run, sw0),
-        "Cal_ave": cal_ave(n_eval_run),
-        "window": {
-            "T_rip_RMSE": run_desc,
-            "psi_rip_RMSE": run_desc,
-            "f_ave_hz": {**run_desc, "definition": "leg state changes / (3 legs * t), = N_switching/(6 t) of seed eq. (9)"},
-            "Cal_ave": run_desc,
-            "ripple_std_pp": rip_desc,
-            "THD_ia": thd_info,
-        },
-        "steady": steady,
     }

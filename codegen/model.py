@@ -21,8 +21,11 @@ TableSource = Literal["derived", "published"]
 Target = Literal["host", "stm32h743", "tms320f28377"]
 SpeedMode = Literal["mechanical", "imposed"]
 
-TWO_LEVEL_STRATEGIES: tuple[str, ...] = ("conventional", "s1", "s2", "s3")
-THREE_LEVEL_STRATEGIES: tuple[str, ...] = ("mpdtc27", "mpdtc63")
+#: The strategies of each topology, in report order (the first is the baseline).
+STRATEGIES_BY_TOPOLOGY: dict[str, tuple[str, ...]] = {
+    "two-level": ("conventional", "s1", "s2", "s3"),
+    "t-type": ("mpdtc27", "mpdtc63"),
+}
 PREDICTORS: tuple[str, ...] = ("flux-geometry", "dq-euler")
 TABLE_SOURCES: tuple[str, ...] = ("derived", "published")
 TARGETS: tuple[str, ...] = ("host", "stm32h743", "tms320f28377")

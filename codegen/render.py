@@ -1,7 +1,10 @@
-"""Render the derived tables into C through jinja2 (templates only format).
+"""Rendering derived tables into C through jinja2 (templates only format).
 
-Target profiles differ only in placement attributes and comments; the
-arithmetic is identical for every target.
+The environment, the target profiles and the context every generated file
+shares (banner, prefix, config hash); each topology builds the rest of its
+context from its own derived tables.  Target profiles differ only in
+placement attributes and comments; the arithmetic is identical for every
+target.
 """
 from __future__ import annotations
 
@@ -10,12 +13,10 @@ from pathlib import Path
 
 import jinja2
 
-from . import __version__
-from .f32 import c_float_literal
-from .model import Model
-from .resources import templates_dir
-from .twolevel.derive import TwoLevelTables
-from .twolevel.interface import FAULT_BITS, INPUT_FIELDS, N_VECTORS, OUTPUT_FIELDS
+from codegen import __version__
+from codegen.model import Model
+from codegen.numfmt.float32 import c_float_literal
+from codegen.resources import templates_dir
 
 
 @dataclass(frozen=True)
@@ -57,69 +58,24 @@ def environment() -> jinja2.Environment:
     return env
 
 
-@dataclass(frozen=True)
-class _Row:
-    cells: tuple[int, ...]
-    label: str
-
-
-def _row_labels(t: TwoLevelTables) -> list[str]:
-    if t.n_sectors == 1:
-        return ["all candidates V0..V6"]
-    names = {
-        2: ["dT>0", "dT<0"],
-        4: ["dT>0 dpsi>0", "dT>0 dpsi<=0", "dT<0 dpsi>0", "dT<0 dpsi<=0"],
-    }[t.n_conditions]
-    return [f"{names[c]}, sector {s + 1}" for c in range(t.n_conditions) for s in range(t.n_sectors)]
-
-
-def two_level_context(model: Model, t: TwoLevelTables, target: str) -> dict:
-    """Template context: values to print, already derived."""
-    labels = _row_labels(t)
-    rows = [
-        _Row(tuple(r) + (0,) * (N_VECTORS - len(r)), f"{lab}: " + " ".join(f"V{v}" for v in r))
-        for r, lab in zip(t.rows, labels)
-    ]
+def base_context(model: Model, target: str) -> dict:
+    """Context every generated file of ``model`` shares."""
+    if target not in PROFILES:
+        raise ValueError(f"unknown target {target!r}; allowed: {', '.join(PROFILES)}")
     return {
         "model_name": model.name,
         "config_hash": model.config_hash(),
         "version": __version__,
         "prefix": model.prefix,
         "PREFIX": model.prefix.upper(),
-        "strategy": t.strategy,
-        "predictor": t.predictor,
-        "delay_compensation": t.delay_compensation,
         "profile": PROFILES[target],
-        "consts": t.consts,
-        "ux": t.ux,
-        "uy": t.uy,
-        "vec_to_sw": t.vec_to_sw,
-        "sw_to_vec": t.sw_to_vec,
-        "zero_sw": t.zero_sw,
-        "n_sectors": t.n_sectors,
-        "uses_threshold": t.uses_threshold,
-        "rows": t.rows,
-        "rows_padded": rows,
-        "row_len": t.row_len,
-        "n_vectors": N_VECTORS,
-        "faults": FAULT_BITS,
-        "input_fields": INPUT_FIELDS,
-        "output_fields": OUTPUT_FIELDS,
     }
 
 
-def render_two_level(model: Model, t: TwoLevelTables, target: str) -> dict[str, str]:
-    """File name -> text of the generated controller for ``target``."""
-    if target not in PROFILES:
-        raise ValueError(f"unknown target {target!r}; allowed: {', '.join(PROFILES)}")
+def render_files(templates: dict[str, str], ctx: dict) -> dict[str, str]:
+    """File name -> rendered text, for file name -> template path."""
     env = environment()
-    ctx = two_level_context(model, t, target)
-    p = model.prefix
-    return {
-        f"{p}_mpc.h": env.get_template("twolevel/mpc.h.j2").render(ctx),
-        f"{p}_mpc.c": env.get_template("twolevel/mpc.c.j2").render(ctx),
-        "mpc_binding.h": env.get_template("twolevel/binding.h.j2").render(ctx),
-    }
+    return {name: env.get_template(tpl).render(ctx) for name, tpl in templates.items()}
 
 
 def write_files(files: dict[str, str], outdir: Path) -> list[Path]:

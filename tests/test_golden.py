@@ -30,21 +30,12 @@ def _golden(name: str, strategy: str) -> tuple[dict[str, np.ndarray], dict[str, 
 
 
 def _build(model):
-    if model.inverter.topology == "t-type":
-        from codegen.threelevel import reference
-        from codegen.threelevel.derive import derive_three_level
-        from codegen.threelevel.hostbuild import build_three_level_library
-        from codegen.threelevel.interface import INPUT_DTYPE
+    from codegen.stages.fwdata import layouts
+    from codegen.topology import topology_of
 
-        t = derive_three_level(model)
-        return INPUT_DTYPE, (lambda x: reference.step_batch(t, x)), build_three_level_library(model, t).step_batch
-    from codegen.hostbuild import build_host_library
-    from codegen.twolevel import reference
-    from codegen.twolevel.interface import INPUT_DTYPE
-    from codegen.twolevel.switch_tables import tables_for
-
-    t = tables_for(model)
-    return INPUT_DTYPE, (lambda x: reference.step_batch(t, x)), build_host_library(model, t, with_sim=False).step_batch
+    topo = topology_of(model)
+    t = topo.derive(model)
+    return layouts(model)[0].dtype, (lambda x: topo.step_batch(t, x)), topo.host_library(model, t).step_batch
 
 
 @pytest.mark.parametrize("name,strategy", CASES)

@@ -6,13 +6,13 @@ import json
 import numpy as np
 import pytest
 
-import codegen.hostbuild as hostbuild
+import codegen.topologies.twolevel.hostbuild as hostbuild
 from codegen.cli import main
 from codegen.compare import mismatch_mask
-from codegen.twolevel import reference
-from codegen.twolevel.states import adversarial_states, random_states
-from codegen.twolevel.switch_tables import tables_for
-from codegen.verify import verify_strategy
+from codegen.topologies.twolevel import reference
+from codegen.topologies.twolevel.states import adversarial_states, random_states
+from codegen.topologies.twolevel.switch_tables import tables_for
+from codegen.stages.verify import verify_strategy
 from conftest import IPMSM, SPMSM, TWO_LEVEL, model_for
 
 
@@ -67,7 +67,7 @@ def test_verify_detects_a_one_ulp_change(monkeypatch):
         line = next(l for l in files[name].splitlines() if l.startswith(f"#define {lit}"))
         val = tables.const("INV_TN")
         bumped = np.nextafter(val, np.float32(1)).astype(np.float32)
-        from codegen.f32 import c_float_literal
+        from codegen.numfmt.float32 import c_float_literal
 
         files[name] = files[name].replace(line, line.replace(c_float_literal(val), c_float_literal(bumped)))
         assert files[name] != real(model, tables, target)[name]

@@ -1,7 +1,7 @@
 /*
  * selftest.h -- replay embedded controller input states, compare every
  * output value bit for bit with the embedded expected outputs of the Python
- * reference (codegen/twolevel/reference.py), time every step, and report
+ * reference (codegen/topologies/twolevel/reference.py), time every step, and report
  * over the console.
  *
  * The generated mpc_values.h gives the value counts and the data's config

@@ -1,13 +1,13 @@
-"""Shared helpers of the firmware tests: SPMSM models and tables per strategy, tool skips.
+"""Shared helpers of the firmware tests: example models and tables per strategy, tool skips.
 
 Not a conftest.py: tests/conftest.py is imported as ``conftest`` by other
 test modules, and a second conftest.py here would shadow it.
 
 Tests that need the Arm cross toolchain or QEMU are skipped, with the reason,
 only when those are not installed on a developer machine.  Under CI (CI set
-in the environment; .ci/run installs the Debian packages gcc-arm-none-eabi,
-libnewlib-arm-none-eabi, qemu-system-arm) they are never skipped: a missing
-tool fails them.
+in the environment; the bootstrap installs the Debian packages
+gcc-arm-none-eabi, libnewlib-arm-none-eabi, qemu-system-arm) they are never
+skipped: a missing tool fails them.
 """
 from __future__ import annotations
 
@@ -15,25 +15,31 @@ import os
 import shutil
 from functools import lru_cache
 from pathlib import Path
+from typing import Any
 
 import pytest
 
 from codegen.config import load_config
 from codegen.model import Model
-from codegen.twolevel.derive import TwoLevelTables, derive_two_level
-from codegen.twolevel.utilisation import published_tables
+from codegen.topology import topology_of
 
 ROOT = Path(__file__).resolve().parents[2]
-SPMSM = ROOT / "examples" / "seed001_spmsm.toml"
-STRATEGIES = ("conventional", "s1", "s2", "s3")
+EXAMPLES = {"spmsm": ROOT / "examples" / "seed001_spmsm.toml", "tlevel": ROOT / "examples" / "seed000_tlevel.toml"}
+SPMSM = EXAMPLES["spmsm"]
+TLEVEL = EXAMPLES["tlevel"]
+#: (example, strategy) of every strategy of both topologies
+CASES = [("spmsm", s) for s in ("conventional", "s1", "s2", "s3")] + [("tlevel", s) for s in ("mpdtc27", "mpdtc63")]
+CASE_IDS = [f"{c}-{s}" for c, s in CASES]
 
 
 @lru_cache(maxsize=None)
-def spmsm(strategy: str) -> tuple[Model, TwoLevelTables]:
-    """The SPMSM example with ``strategy``; s2/s3 use the published switch tables."""
-    m = load_config(SPMSM, {"controller.strategy": strategy})
-    s2, s3 = published_tables()
-    return m, derive_two_level(m, {"s2": s2, "s3": s3}.get(strategy))
+def example(config: str, strategy: str) -> tuple[Model, Any]:
+    """An example config with ``strategy`` and its derived tables (two-level: published switch tables)."""
+    overrides: dict[str, object] = {"controller.strategy": strategy}
+    if config == "spmsm":
+        overrides["controller.tables"] = "published"  # no training run in the firmware tests
+    m = load_config(EXAMPLES[config], overrides)
+    return m, topology_of(m).derive(m)
 
 
 def _missing(*exes: str) -> list[str]:
@@ -48,16 +54,3 @@ needs_arm = pytest.mark.skipif(bool(_missing("arm-none-eabi-gcc")),
 needs_qemu = pytest.mark.skipif(bool(_missing("arm-none-eabi-gcc", "qemu-system-arm")),
                                 reason="arm-none-eabi-gcc or qemu-system-arm not installed "
                                        "(apt-get install gcc-arm-none-eabi libnewlib-arm-none-eabi qemu-system-arm)")
-
-
-TLEVEL = ROOT / "examples" / "seed000_tlevel.toml"
-THREE_LEVEL_STRATEGIES = ("mpdtc27", "mpdtc63")
-
-
-@lru_cache(maxsize=None)
-def tlevel(strategy: str):
-    """The T-type three-level example with ``strategy`` and its ThreeLevelTables."""
-    from codegen.threelevel.derive import derive_three_level
-
-    m = load_config(TLEVEL, {"controller.strategy": strategy})
-    return m, derive_three_level(m)

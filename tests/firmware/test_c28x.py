@@ -15,10 +15,10 @@ from pathlib import Path
 
 import pytest
 
-from codegen import fwproject as firmware
+from codegen.stages import firmware as firmware
 from codegen.hostbuild import STRICT_CFLAGS
 
-from fw_support import spmsm
+from fw_support import example
 
 MODEL_H = Path(__file__).resolve().parent / "c28x_type_model.h"
 # --param=min-pagesize=0: the registers live at small addresses (CpuTimer1 at
@@ -41,7 +41,7 @@ def _code(text: str) -> str:
 
 @pytest.fixture(scope="module")
 def project(tmp_path_factory) -> Path:
-    m, t = spmsm("s3")
+    m, t = example("spmsm", "s3")
     out = tmp_path_factory.mktemp("c28x")
     firmware.write_firmware_project(m, t, "tms320f28377", out, 10_000)
     return out

@@ -3,16 +3,16 @@ from __future__ import annotations
 
 import pytest
 
-from codegen import emulate
-from codegen import fwproject as firmware
+from codegen.stages import emulate
+from codegen.stages import firmware as firmware
 from codegen.errors import MpcgenError
 
-from fw_support import spmsm
+from fw_support import example
 
 
 @pytest.mark.parametrize("board", ["stm32h7", "", "QEMU-M7", "arduino"])
 def test_unknown_board(tmp_path, board):
-    m, t = spmsm("conventional")
+    m, t = example("spmsm", "conventional")
     with pytest.raises(MpcgenError) as err:
         firmware.write_firmware_project(m, t, board, tmp_path, 10)
     msg = str(err.value)
@@ -23,7 +23,7 @@ def test_unknown_board(tmp_path, board):
 
 
 def test_missing_toolchain_and_qemu(tmp_path, monkeypatch):
-    m, t = spmsm("conventional")
+    m, t = example("spmsm", "conventional")
     firmware.write_firmware_project(m, t, "qemu-m7", tmp_path, 10, n_bench=0)
     monkeypatch.setenv("PATH", str(tmp_path / "empty"))
     with pytest.raises(firmware.ToolchainError) as err:
@@ -36,7 +36,7 @@ def test_missing_toolchain_and_qemu(tmp_path, monkeypatch):
 
 
 def test_too_many_states_for_the_board(tmp_path):
-    m, t = spmsm("conventional")
+    m, t = example("spmsm", "conventional")
     with pytest.raises(MpcgenError) as err:
         firmware.write_firmware_project(m, t, "tms320f28377", tmp_path, 20_000, n_bench=0)
     assert "lower n_selftest" in str(err.value) and "\n" not in str(err.value)

@@ -6,18 +6,17 @@ import subprocess
 
 import pytest
 
-from codegen import emulate
-from codegen import fwproject as firmware
-from codegen.fwdata import expected_outputs, selftest_states, topology_of, values_crc
+from codegen.stages import emulate
+from codegen.stages import firmware as firmware
+from codegen.stages.fwdata import expected_outputs, layouts, selftest_states
+from codegen.topology import topology_of
 
-from fw_support import spmsm, tlevel
-
-CASES = [("spmsm", s) for s in ("conventional", "s1", "s2", "s3")] + [("tlevel", s) for s in ("mpdtc27", "mpdtc63")]
+from fw_support import CASE_IDS, CASES, example
 
 
-@pytest.mark.parametrize("config,strategy", CASES, ids=[f"{c}-{s}" for c, s in CASES])
+@pytest.mark.parametrize("config,strategy", CASES, ids=CASE_IDS)
 def test_host_port_sanitizers(tmp_path, config, strategy):
-    m, t = (spmsm if config == "spmsm" else tlevel)(strategy)
+    m, t = example(config, strategy)
     n = 10_000 if config == "spmsm" else 3_000
     firmware.write_firmware_project(m, t, "host", tmp_path, n, n_bench=200)
     res = firmware.build_firmware(tmp_path, "host", make_vars={"SANITIZE": "1"})
@@ -28,5 +27,5 @@ def test_host_port_sanitizers(tmp_path, config, strategy):
     assert run.returncode == 0 and rep.result == "PASS", run.stdout[-2000:]
     s = rep.sets["selftest"]
     assert s.n == n and s.mismatches == 0 and rep.sets["bench"].mismatches == 0
-    outputs = expected_outputs(t, selftest_states(m, t, n))
-    assert s.crc_out == values_crc(outputs, topology_of(m).output_fields)
+    outputs = expected_outputs(topology_of(m), t, selftest_states(m, t, n))
+    assert s.crc_out == layouts(m)[1].crc(outputs)

@@ -1,4 +1,4 @@
-"""qemu-m7 images in QEMU: every self-test result bit-identical to the Python reference.
+"""qemu-m7 images in QEMU, every strategy of both topologies: bit-identical to the Python reference.
 
 The firmware compares each output value with its embedded expected outputs
 (from the reference) and prints CRC-32 digests of all inputs and outputs;
@@ -7,21 +7,26 @@ fresh reference run, so an image that only printed 'PASS' could not pass.
 """
 from __future__ import annotations
 
+import json
 import os
 
 import numpy as np
 import pytest
 
-from codegen import emulate
-from codegen import fwproject as firmware
-from codegen.fwdata import selftest_states, trajectory_states, values_crc
-from codegen.twolevel.interface import INPUT_FIELDS, OUTPUT_FIELDS
-from codegen.twolevel.reference import step_batch
+from codegen.errors import MpcgenError
+from codegen.records import REAL
+from codegen.stages import emulate
+from codegen.stages import firmware as firmware
+from codegen.stages.fwdata import layouts, selftest_states, trajectory_states
+from codegen.topology import topology_of
 
-from fw_support import STRATEGIES, needs_qemu, spmsm
+from fw_support import CASE_IDS, CASES, TLEVEL, example, needs_arm, needs_qemu
 
 N_SELFTEST = 10_000
 N_BENCH = 2_000
+#: a corrupted expectation per topology: (set index, field, record, element or None)
+CORRUPT = {"spmsm": ("s3", [(5, "te_nm", None), (7, "cand", 1)]),
+           "tlevel": ("mpdtc27", [(150, "costs", 18), (160, "cand", 3)])}
 
 
 def _gone(pid: int) -> bool:
@@ -34,26 +39,46 @@ def _gone(pid: int) -> bool:
 
 @pytest.fixture(scope="module")
 def images(tmp_path_factory):
-    """Built qemu-m7 project per strategy (built lazily, once)."""
-    cache: dict[str, firmware.BuildResult] = {}
+    """Built qemu-m7 project per (config, strategy), built lazily, once."""
+    cache: dict[tuple[str, str], firmware.BuildResult] = {}
 
-    def get(strategy: str) -> firmware.BuildResult:
-        if strategy not in cache:
-            m, t = spmsm(strategy)
-            out = tmp_path_factory.mktemp(f"qemu_{strategy}")
+    def get(config: str, strategy: str) -> firmware.BuildResult:
+        if (config, strategy) not in cache:
+            m, t = example(config, strategy)
+            out = tmp_path_factory.mktemp(f"qemu_{config}_{strategy}")
             firmware.write_firmware_project(m, t, "qemu-m7", out, N_SELFTEST, n_bench=N_BENCH)
-            cache[strategy] = firmware.build_firmware(out, "qemu-m7")
-        return cache[strategy]
+            cache[config, strategy] = firmware.build_firmware(out, "qemu-m7")
+        return cache[config, strategy]
 
     return get
 
 
+@pytest.mark.parametrize("config,strategy", CASES, ids=CASE_IDS)
+def test_selftest_states_cover_every_guard(config, strategy):
+    """Guard cases first, deterministic, every fault bit alone, finite reference outputs."""
+    m, t = example(config, strategy)
+    topo = topology_of(m)
+    inp, _ = layouts(m)
+    x = selftest_states(m, t, N_SELFTEST)
+    assert x.dtype == inp.dtype and len(x) == N_SELFTEST
+    assert np.array_equal(inp.pack(x), inp.pack(selftest_states(m, t, N_SELFTEST)))
+    y = topo.step_batch(t, x)
+    bits = sorted({int(b) for b in y["fault"] if b and not (b & (b - 1))})
+    assert len(bits) >= 7, f"single fault bits seen: {bits}"
+    assert (y["fault"] == 0).mean() > 0.5
+    for f in topo.output_record.fields:
+        if f.kind == REAL:
+            assert np.all(np.isfinite(y[f.name]))
+
+
 @needs_qemu
 @pytest.mark.slow
-@pytest.mark.parametrize("strategy", STRATEGIES)
-def test_selftest_bit_exact_in_qemu(images, strategy):
-    m, t = spmsm(strategy)
-    build = images(strategy)
+@pytest.mark.parametrize("config,strategy", CASES, ids=CASE_IDS)
+def test_selftest_bit_exact_in_qemu(images, config, strategy):
+    m, t = example(config, strategy)
+    inp, out = layouts(m)
+    topo = topology_of(m)
+    build = images(config, strategy)
     run = emulate.run_qemu(build.image, timeout_s=300)
     assert _gone(run.pid), "QEMU still running after run_qemu returned"
     assert not run.timed_out, run.uart[-500:]
@@ -65,29 +90,41 @@ def test_selftest_bit_exact_in_qemu(images, strategy):
 
     # independent host recomputation: states regenerated, reference rerun
     x = selftest_states(m, t, N_SELFTEST)
-    b = trajectory_states(m, t, N_BENCH)
+    b = trajectory_states(m, N_BENCH)
     for name, states in (("selftest", x), ("bench", b)):
         s = rep.sets[name]
         assert s.n == len(states) and s.mismatches == 0, s.details[:20]
-        assert s.crc_in == values_crc(states, INPUT_FIELDS)
-        assert s.crc_out == values_crc(step_batch(t, states), OUTPUT_FIELDS)
+        assert s.crc_in == inp.crc(states)
+        assert s.crc_out == out.crc(topo.step_batch(t, states))
     assert rep.sets["selftest"].n >= 10_000
     bench = rep.sets["bench"]
     assert len(bench.cycles) == N_BENCH and min(bench.cycles) > 0
+    # every strategy is benchmarked on the baseline's trajectory
+    base_m, _ = example(config, topo.strategies[0])
+    assert np.array_equal(inp.pack(b), inp.pack(trajectory_states(base_m, N_BENCH)))
 
 
 @needs_qemu
 @pytest.mark.slow
-def test_mismatch_is_detected_and_reported(tmp_path, monkeypatch):
-    """A wrong embedded expectation must fail the run with per-mismatch details."""
-    m, t = spmsm("s3")
+@pytest.mark.parametrize("config", sorted(CORRUPT))
+def test_mismatch_is_detected_and_reported(tmp_path, monkeypatch, config):
+    """A wrong embedded expectation (scalar or array element) fails the run, reported per value."""
+    strategy, edits = CORRUPT[config]
+    m, t = example(config, strategy)
     real = firmware.make_test_sets
 
     def corrupted(*args, **kwargs):
         sets = real(*args, **kwargs)
         e = sets[0].expected
-        e["te_nm"][5] = np.nextafter(e["te_nm"][5], np.float32(np.inf))
-        e["cand"][7][1] ^= 1
+        for i, name, j in edits:
+            col = e[name]
+            if col.dtype.kind == "f":
+                if j is None:
+                    col[i] = np.nextafter(col[i], np.float32(np.inf))
+                else:
+                    col[i][j] = np.nextafter(col[i][j], np.float32(np.inf))
+            else:
+                col[i][j] ^= 1
         return sets
 
     monkeypatch.setattr(firmware, "make_test_sets", corrupted)
@@ -97,22 +134,75 @@ def test_mismatch_is_detected_and_reported(tmp_path, monkeypatch):
     assert run.returncode == 1 and rep.result == "FAIL" and rep.exit_code == 1
     s = rep.sets["selftest"]
     assert s.mismatches == 2
-    assert any("i=5 field=te_nm" in d for d in s.details)
-    assert any("i=7 field=cand[1]" in d for d in s.details)
-    assert any(d.startswith("STATE set=selftest i=5 ") for d in s.details)
+    for i, name, j in edits:
+        field = name if j is None else f"{name}[{j}]"
+        assert any(f"i={i} field={field}" in d for d in s.details), s.details
+    assert any(d.startswith(f"STATE set=selftest i={edits[0][0]} ") for d in s.details)
     # the firmware's digest is of what it computed: still the true reference
     monkeypatch.undo()
-    assert s.crc_out == values_crc(step_batch(t, selftest_states(m, t, 300)), OUTPUT_FIELDS)
+    _, out = layouts(m)
+    assert s.crc_out == out.crc(topology_of(m).step_batch(t, selftest_states(m, t, 300)))
 
 
 @needs_qemu
 @pytest.mark.slow
 def test_systick_scaling_and_timeout_cleanup(images):
     """ticks = instructions * 2^shift / 40 at another shift; a timed-out QEMU is killed."""
-    build = images("s3")
+    build = images("spmsm", "s3")
     for shift in (6, 8):
         rep = emulate.parse_console(emulate.run_qemu(build.image, icount_shift=shift).uart)
         assert abs(emulate.check_calibration(rep, shift) - 1024) <= 0.5
     run = emulate.run_qemu(build.image, timeout_s=0)
     assert run.timed_out and run.returncode is None
     assert _gone(run.pid)
+
+
+def test_board_budgets(tmp_path):
+    """27-MPDTC outputs are 204 octets: the STM32H743 gets compact CRCs, the C2000 refuses 20 000 states."""
+    m, t = example("tlevel", "mpdtc27")
+    firmware.write_firmware_project(m, t, "stm32h743", tmp_path / "h7", 10_000, n_bench=0)
+    data = (tmp_path / "h7/gen/mpc_selftest_data.c").read_text()
+    assert "selftest_expected_crc" in data and "codegen.topologies.ttype.reference.step_batch" in data
+    firmware.write_firmware_project(m, t, "stm32h743", tmp_path / "h7full", 5000, n_bench=0)
+    assert "selftest_expected_crc" not in (tmp_path / "h7full/gen/mpc_selftest_data.c").read_text()
+    with pytest.raises(MpcgenError) as err:
+        firmware.write_firmware_project(m, t, "tms320f28377", tmp_path / "c2000", 20_000, n_bench=0)
+    assert "lower n_selftest" in str(err.value)
+
+
+@needs_arm
+@pytest.mark.slow
+def test_ttype_stm32h743_builds(tmp_path):
+    m, t = example("tlevel", "mpdtc63")
+    firmware.write_firmware_project(m, t, "stm32h743", tmp_path, 2000, n_bench=0)
+    b = firmware.build_firmware(tmp_path, "stm32h743")
+    assert b.text > 0 and 0 < b.stack_depth < 8192
+
+
+@needs_qemu
+@pytest.mark.slow
+def test_ttype_emulated_bench(tmp_path):
+    from codegen.cli import main
+
+    js = tmp_path / "bench3.json"
+    assert main(["bench", str(TLEVEL), "--emulated", "--json", str(js), "--repeats", "1", "-q"]) == 0
+    data = json.loads(js.read_text())
+    s27, s63 = data["strategies"]["mpdtc27"], data["strategies"]["mpdtc63"]
+    assert s27["m7_instructions_per_step"] > 100 and s27["ratio_to_conventional"] == 1.0
+    # 63-MPDTC evaluates 3..7 voltage groups instead of 19: fewer instructions
+    assert s63["m7_instructions_per_step"] < s27["m7_instructions_per_step"]
+
+
+@needs_arm
+@pytest.mark.slow
+def test_ttype_firmware_command_builds(tmp_path):
+    """`mpcgen firmware` on a t-type config writes a qemu-m7 project that builds (no two-level fallback)."""
+    import subprocess
+
+    from codegen.cli import main
+
+    out = tmp_path / "fw3"
+    assert main(["firmware", str(TLEVEL), "--board", "qemu-m7", "-o", str(out), "-q"]) == 0
+    r = subprocess.run(["make", "-C", str(out)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
+    assert "tlevel_step" in (out / "gen" / "tlevel_mpc.c").read_text()

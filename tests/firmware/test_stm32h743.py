@@ -4,14 +4,14 @@ from __future__ import annotations
 import re
 import subprocess
 
-from codegen import fwproject as firmware
+from codegen.stages import firmware as firmware
 
-from fw_support import needs_arm, spmsm
+from fw_support import example, needs_arm
 
 
 @needs_arm
 def test_stm32h743_build_layout(tmp_path):
-    m, t = spmsm("s3")
+    m, t = example("spmsm", "s3")
     firmware.write_firmware_project(m, t, "stm32h743", tmp_path, 10_000)
     res = firmware.build_firmware(tmp_path, "stm32h743")
     assert "warning" not in res.log.lower(), res.log

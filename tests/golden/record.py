@@ -45,11 +45,11 @@ def record_controller(name: str) -> None:
     base = load_config(ROOT / "examples" / f"{name}.toml")
     arrays: dict[str, np.ndarray] = {}
     if base.inverter.topology == "t-type":
-        from codegen.threelevel import reference
-        from codegen.threelevel.derive import derive_three_level
-        from codegen.threelevel.hostbuild import build_three_level_library
-        from codegen.threelevel.states import adversarial_states, random_states
-        from codegen.threelevel.verify import closed_loop_states
+        from codegen.topologies.ttype import reference
+        from codegen.topologies.ttype.derive import derive_three_level
+        from codegen.topologies.ttype.hostbuild import build_three_level_library
+        from codegen.topologies.ttype.states import adversarial_states, random_states
+        from codegen.topologies.ttype.verify import closed_loop_states
 
         strategies = ("mpdtc27", "mpdtc63")
         for s in strategies:
@@ -64,10 +64,10 @@ def record_controller(name: str) -> None:
             _store(arrays, s, x, ref)
     else:
         from codegen.hostbuild import build_host_library
-        from codegen.twolevel import reference
-        from codegen.twolevel.states import adversarial_states, random_states
-        from codegen.twolevel.switch_tables import tables_for
-        from codegen.verify import closed_loop_states
+        from codegen.topologies.twolevel import reference
+        from codegen.topologies.twolevel.states import adversarial_states, random_states
+        from codegen.topologies.twolevel.switch_tables import tables_for
+        from codegen.stages.verify import closed_loop_states
 
         for s in ("conventional", "s1", "s2", "s3"):
             m = base.with_controller(strategy=s)

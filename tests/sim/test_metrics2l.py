@@ -16,9 +16,9 @@ from codegen.metrics import (
     rmse,
     steady_windows,
     thd,
-    two_level_metrics,
     window_mask,
 )
+from codegen.topologies.twolevel.metrics import two_level_metrics
 
 DT = 50e-6
 
@@ -109,7 +109,7 @@ def test_steady_windows_spmsm(spmsm_model):
 
 
 def test_two_level_metrics_keys_and_windows(stub_lib, spmsm_model):
-    from codegen.simulate import run_closed_loop
+    from codegen.topologies.twolevel.sim import run_closed_loop
 
     ffi, lib = stub_lib
     lib.stub_set_echo(0)

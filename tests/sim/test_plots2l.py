@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import dataclasses
 
-from codegen.plots import plot_two_level
-from codegen.simulate import run_closed_loop
+from codegen.topologies.twolevel.plots import plot_two_level
+from codegen.topologies.twolevel.sim import run_closed_loop
 
 
 def test_plots_write_pngs(stub_lib, spmsm_model, tmp_path):

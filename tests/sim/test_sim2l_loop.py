@@ -9,17 +9,9 @@ import numpy as np
 import pytest
 
 from codegen.metrics import steady_windows, window_slice
-from codegen.simulate import (
-    SimulationError,
-    Trace,
-    controller_inputs,
-    default_substeps,
-    n_periods,
-    params_from_model,
-    run_closed_loop,
-    scenario_arrays,
-)
-from codegen.twolevel.interface import INPUT_DTYPE
+from codegen.simulator.driver import SimulationError, default_substeps, n_periods, scenario_arrays
+from codegen.topologies.twolevel.sim import Trace, controller_inputs, params_from_model, run_closed_loop
+from codegen.topologies.twolevel.records import INPUT_DTYPE
 
 RPM = 2 * math.pi / 60
 

@@ -15,8 +15,9 @@ import numpy as np
 import pytest
 
 from codegen.model import Controller, Inverter, Model, Motor, Scenario, SpeedLoop
-from codegen.simulate3l import RUNTIME, RUNTIME_SOURCES, runtime_cdef
-from codegen.threelevel.virtual import VIRTUAL
+from codegen.simulator.driver import CSRC as SHARED_CSRC
+from codegen.topologies.ttype.sim import RUNTIME, RUNTIME_SOURCES, runtime_cdef
+from codegen.topologies.ttype.virtual import VIRTUAL
 
 ROOT = Path(__file__).resolve().parents[2]
 STUB3 = ROOT / "tests" / "fixtures" / "stub_mpc3"
@@ -38,7 +39,7 @@ def build_stub3_library(tmpdir: Path):
     """plant3l + sim3l + stub controller, strict flags, cffi ABI mode."""
     out = Path(tmpdir) / "libsim3l_stub.so"
     sources = [*RUNTIME_SOURCES, STUB3 / "stub_mpc3.c"]
-    cmd = ["gcc", *CFLAGS, "-fPIC", "-shared", f"-I{RUNTIME}", f"-I{STUB3}",
+    cmd = ["gcc", *CFLAGS, "-fPIC", "-shared", f"-I{RUNTIME}", f"-I{SHARED_CSRC}", f"-I{STUB3}",
            *map(str, sources), "-o", str(out), "-lm"]
     proc = subprocess.run(cmd, capture_output=True, text=True)
     if proc.returncode != 0 or proc.stderr.strip():

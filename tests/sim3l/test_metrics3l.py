@@ -7,15 +7,15 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from codegen.metrics3l import (
+from codegen.topologies.ttype.metrics import (
     leg_level_changes,
     line_jump_histogram,
     resample_piecewise,
     three_level_metrics,
     uab_thd,
 )
-from codegen.plots3l import plot_three_level
-from codegen.simulate3l import run_closed_loop3
+from codegen.topologies.ttype.plots import plot_three_level
+from codegen.topologies.ttype.sim import run_closed_loop3
 
 from .conftest import seed000_model
 

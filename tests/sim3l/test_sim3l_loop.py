@@ -8,9 +8,9 @@ import cffi
 import numpy as np
 import pytest
 
-from codegen.metrics3l import leg_level_changes
-from codegen.simulate import SimulationError
-from codegen.simulate3l import (
+from codegen.topologies.ttype.metrics import leg_level_changes
+from codegen.topologies.twolevel.sim import SimulationError
+from codegen.topologies.ttype.sim import (
     INPUT3_DTYPE,
     RUNTIME,
     Trace3,

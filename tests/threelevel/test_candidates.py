@@ -6,12 +6,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from codegen.threelevel import candidates as cd
-from codegen.threelevel import published as pub
-from codegen.threelevel import report as rp
-from codegen.threelevel import transitions as tr
-from codegen.threelevel import vectors as v
-from codegen.threelevel import virtual as vv
+from codegen.topologies.ttype import candidates as cd
+from codegen.topologies.ttype import published as pub
+from codegen.topologies.ttype import tables_text as rp
+from codegen.topologies.ttype import transitions as tr
+from codegen.topologies.ttype import vectors as v
+from codegen.topologies.ttype import virtual as vv
 
 S = v.state_by_name
 

@@ -11,16 +11,16 @@ import numpy as np
 import pytest
 
 from codegen.config import load_config
-from codegen.threelevel import transitions as tr
-from codegen.threelevel import vectors as v
-from codegen.threelevel import virtual as vv
-from codegen.threelevel.derive import derive_three_level, t_n_min
-from codegen.threelevel.hostbuild import build_three_level_library
-from codegen.threelevel.interface import FAULT, INPUT_DTYPE, SAFE_STATE
-from codegen.threelevel import reference
-from codegen.threelevel.render import render_three_level
-from codegen.threelevel.states import adversarial_states, random_states
-from codegen.threelevel.verify import verify_three_level
+from codegen.topologies.ttype import transitions as tr
+from codegen.topologies.ttype import vectors as v
+from codegen.topologies.ttype import virtual as vv
+from codegen.topologies.ttype.derive import derive_three_level, t_n_min
+from codegen.topologies.ttype.hostbuild import build_three_level_library
+from codegen.topologies.ttype.records import FAULT, INPUT_DTYPE, SAFE_STATE
+from codegen.topologies.ttype import reference
+from codegen.topologies.ttype.render import render_three_level
+from codegen.topologies.ttype.states import adversarial_states, random_states
+from codegen.stages.verify import verify_strategy
 from conftest import EXAMPLES, require_tool
 
 TLEVEL = EXAMPLES / "seed000_tlevel.toml"
@@ -96,7 +96,7 @@ def test_rendering_is_deterministic(strategy):
 
 @pytest.mark.parametrize("strategy", STRATEGIES)
 def test_bit_for_bit_200k(strategy):
-    r = verify_three_level(model(strategy), 200_000)
+    r = verify_strategy(model(strategy), 200_000, log=lambda _m: None).as_dict()
     assert r["states"] >= 200_000
     assert r["mismatches"] == 0, r["first_mismatch"]
     assert 0 < r["faulted_states"] < r["states"] // 5
@@ -105,7 +105,7 @@ def test_bit_for_bit_200k(strategy):
 @pytest.mark.slow
 @pytest.mark.parametrize("strategy", STRATEGIES)
 def test_bit_for_bit_1e6(strategy):
-    r = verify_three_level(model(strategy), 1_000_000, seed=12)
+    r = verify_strategy(model(strategy), 1_000_000, log=lambda _m: None).as_dict()
     assert r["mismatches"] == 0, r["first_mismatch"]
 
 

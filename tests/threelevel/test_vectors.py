@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from codegen.threelevel import published as pub
-from codegen.threelevel import vectors as v
+from codegen.topologies.ttype import published as pub
+from codegen.topologies.ttype import vectors as v
 
 
 def test_27_states_19_distinct_vectors() -> None:

@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from codegen.threelevel import published as pub
-from codegen.threelevel import vectors as v
-from codegen.threelevel import virtual as vv
+from codegen.topologies.ttype import published as pub
+from codegen.topologies.ttype import vectors as v
+from codegen.topologies.ttype import virtual as vv
 
 
 def test_24_triangles() -> None:

@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from codegen.twolevel import published as pub
-from codegen.twolevel.utilisation import (
+from codegen.topologies.twolevel import published as pub
+from codegen.topologies.twolevel.utilisation import (
     NoUtilisationData,
     compare_tables,
     count_utilisation,

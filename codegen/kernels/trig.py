@@ -1,0 +1,131 @@
+"""Generated sin/cos of the rotor angle in float32 (numerics.md "Float32 path").
+
+The step needs sin and cos of theta_e without libm.  The generator emits a
+fixed sequence of single float32 operations; ``sincos_f32`` below performs
+the same sequence in numpy float32, so the C and the reference agree bit for
+bit, and the accuracy of the approximation is a separately tested property.
+
+Algorithm (per numerics.md: explicit range reduction, then polynomials):
+
+1. quadrant   y = x * (2/pi);  n = trunc(y + copysign(0.5, y))   (nearest)
+2. Cody-Waite r = (x - n*PIO2_HI) - n*PIO2_LO, |r| <= pi/4 (+ rounding);
+   PIO2_HI has few enough significant bits that n*PIO2_HI is exact for
+   |n| <= 2^(24 - PIO2_HI_BITS).
+3. sin r = r + r^3 (S1 + r^2 (S2 + r^2 S3)),
+   cos r = 1 + r^2 (C1 + r^2 (C2 + r^2 (C3 + r^2 C4)))   (Horner)
+4. quadrant q = n mod 4 selects (sin, cos) = (s, c), (c, -s), (-s, -c), (-c, s).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+
+from codegen.numfmt.float32 import f32
+
+#: Largest |theta_e| the step accepts (rad); beyond it the input guard trips.
+ANGLE_GUARD_RAD = 256.0
+_PIO2_HI_BITS = 15  # n <= 2^(24-15) = 512 > 256 * 2/pi + 1
+
+
+@dataclass(frozen=True)
+class SinCosCoeffs:
+    """Float32 constants of the generated sin/cos (all exact float32 values)."""
+
+    two_over_pi: np.float32
+    pio2_hi: np.float32
+    pio2_lo: np.float32
+    s: tuple[np.float32, np.float32, np.float32]  # r^3, r^5, r^7
+    c: tuple[np.float32, np.float32, np.float32, np.float32]  # r^2 .. r^8
+
+
+def _split_pio2() -> tuple[float, float]:
+    hi = math.pi / 2
+    m, e = math.frexp(hi)
+    scale = 2.0 ** _PIO2_HI_BITS
+    hi_trunc = math.floor(m * scale) / scale * 2.0**e
+    return hi_trunc, math.pi / 2 - hi_trunc
+
+
+def _fit(func, powers: list[int], lead: float) -> np.ndarray:
+    """Least-squares fit on Chebyshev nodes of [0, pi/4] (close to minimax).
+
+    Fits func(r) - lead-term by sum(c_k r^k) with the given powers, in float64.
+    """
+    k = np.arange(4000)
+    r = (np.pi / 8) * (1 - np.cos((k + 0.5) * np.pi / len(k)))  # nodes in [0, pi/4]
+    r = r[r > 0]
+    a = np.stack([r**p for p in powers], axis=1)
+    rhs = func(r) - lead * (r if lead and powers[0] % 2 == 1 else 1.0)
+    # relative weighting: minimise relative error of the correction
+    coef, *_ = np.linalg.lstsq(a, rhs, rcond=None)
+    return coef
+
+
+@lru_cache(maxsize=1)
+def sincos_coeffs() -> SinCosCoeffs:
+    """Derive the polynomial coefficients once (float64 fit, float32 rounding)."""
+    hi, lo = _split_pio2()
+    s = _fit(np.sin, [3, 5, 7], 1.0)
+    c = _fit(lambda r: np.cos(r) - 1.0, [2, 4, 6, 8], 0.0)
+    return SinCosCoeffs(
+        two_over_pi=f32(2.0 / math.pi),
+        pio2_hi=f32(hi),
+        pio2_lo=f32(lo),
+        s=tuple(f32(v) for v in s),  # type: ignore[arg-type]
+        c=tuple(f32(v) for v in c),  # type: ignore[arg-type]
+    )
+
+
+def sincos_f32(x: np.ndarray, k: SinCosCoeffs | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """sin and cos of float32 ``x``, the exact operation sequence of the C."""
+    k = k or sincos_coeffs()
+    x = np.asarray(x, dtype=np.float32)
+    half = np.float32(0.5)
+    y = x * k.two_over_pi
+    yr = y + np.where(y >= np.float32(0.0), half, -half).astype(np.float32)
+    n = np.trunc(yr).astype(np.int32)
+    fn = n.astype(np.float32)
+    t = fn * k.pio2_hi
+    r = x - t
+    t = fn * k.pio2_lo
+    r = r - t
+    r2 = r * r
+    ps = k.s[2] * r2
+    ps = ps + k.s[1]
+    ps = ps * r2
+    ps = ps + k.s[0]
+    ps = ps * r2
+    ps = ps * r
+    sr = r + ps
+    pc = k.c[3] * r2
+    pc = pc + k.c[2]
+    pc = pc * r2
+    pc = pc + k.c[1]
+    pc = pc * r2
+    pc = pc + k.c[0]
+    pc = pc * r2
+    cr = np.float32(1.0) + pc
+    q = n & 3
+    s_out = np.select([q == 0, q == 1, q == 2], [sr, cr, -sr], -cr).astype(np.float32)
+    c_out = np.select([q == 0, q == 1, q == 2], [cr, -sr, -cr], sr).astype(np.float32)
+    return s_out, c_out
+
+
+def sincos_constants() -> list[tuple[str, np.float32, str, str]]:
+    """(name, value, unit, meaning) of every constant the generated sin/cos uses."""
+    k = sincos_coeffs()
+    return [
+        ("TWO_OVER_PI", k.two_over_pi, "1/rad", "2/pi: quadrant of theta_e"),
+        ("PIO2_HI", k.pio2_hi, "rad", "pi/2, high part (Cody-Waite)"),
+        ("PIO2_LO", k.pio2_lo, "rad", "pi/2 - PIO2_HI"),
+        ("SIN_S3", k.s[0], "", "sin r = r + r^3 (S3 + r^2 (S5 + r^2 S7))"),
+        ("SIN_S5", k.s[1], "", "sin coefficient of r^5 (least squares on [0, pi/4])"),
+        ("SIN_S7", k.s[2], "", "sin coefficient of r^7"),
+        ("COS_C2", k.c[0], "", "cos r = 1 + r^2 (C2 + r^2 (C4 + r^2 (C6 + r^2 C8)))"),
+        ("COS_C4", k.c[1], "", "cos coefficient of r^4"),
+        ("COS_C6", k.c[2], "", "cos coefficient of r^6"),
+        ("COS_C8", k.c[3], "", "cos coefficient of r^8"),
+    ]

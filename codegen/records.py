@@ -1,0 +1,188 @@
+"""Records defined once: every layout of a controller record derives from one field list.
+
+A :class:`Record` is an ordered list of :class:`Field` (name, kind, length,
+doc, with the unit in the name).  Bound to a number format
+(:meth:`Record.bind`), it gives every layout the product uses:
+
+* ``dtype``: the numpy structured dtype laid out like the C struct (natural
+  alignment; cffi checks it against the compiler at build time);
+* ``members``: the C struct members (type, name, array length, comment);
+* ``packed_dtype`` / :meth:`RecordLayout.pack`: fixed-width little-endian
+  bytes with no padding, field order stable: the canonical serialisation
+  (CRC digests, firmware test data, the serial wire);
+* ``values``: the record flattened into 32-bit values (float bits or
+  integers), as the firmware runtime reads it;
+* ``layout_hash``: a hash of the whole layout (names, kinds, lengths, C
+  types), so two builds from different schemas can tell each other apart.
+"""
+from __future__ import annotations
+
+import hashlib
+import zlib
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from .numfmt import NumberFormat
+
+__all__ = ["REAL", "U16", "Field", "Record", "RecordLayout", "CMember", "Value"]
+
+#: a real value, stored as the number format says (float32, fixed point)
+REAL = "real"
+#: an unsigned 16-bit integer (decisions, indices, counts, fault bits)
+U16 = "u16"
+
+
+@dataclass(frozen=True)
+class Field:
+    """One record member: name (with its unit), kind, array length (1 = scalar), meaning."""
+
+    name: str
+    kind: str  # REAL | U16
+    length: int
+    doc: str
+
+
+@dataclass(frozen=True)
+class Record:
+    """A named, ordered list of fields; bind it to a number format for its layouts."""
+
+    name: str
+    fields: tuple[Field, ...]
+
+    def bind(self, nf: NumberFormat) -> "RecordLayout":
+        """This record's layouts in number format ``nf``."""
+        return RecordLayout(self, nf)
+
+    def field(self, name: str) -> Field:
+        """The field called ``name``."""
+        for f in self.fields:
+            if f.name == name:
+                return f
+        raise KeyError(name)
+
+
+@dataclass(frozen=True)
+class CMember:
+    """One C struct member of a bound record (what templates print)."""
+
+    ctype: str
+    name: str
+    length: int
+    doc: str
+    kind: str
+    zero: str  # C literal of zero of this type
+
+
+@dataclass(frozen=True)
+class Value:
+    """One flattened 32-bit value of a record: printed name, runtime kind, C read expression."""
+
+    name: str
+    kind: str  # "MPC_VALUE_F32" | "MPC_VALUE_U16"
+    read: str  # C expression with REC for the record pointer
+
+
+_U16_NP = np.dtype(np.uint16)
+
+
+class RecordLayout:
+    """A record bound to a number format: numpy dtypes, C members, bytes, hash."""
+
+    def __init__(self, record: Record, nf: NumberFormat) -> None:
+        self.record = record
+        self.nf = nf
+
+    @property
+    def fields(self) -> tuple[Field, ...]:
+        return self.record.fields
+
+    def np_type(self, f: Field) -> np.dtype:
+        """numpy scalar dtype of field ``f``."""
+        return self.nf.real_dtype if f.kind == REAL else _U16_NP
+
+    def c_type(self, f: Field) -> str:
+        """C type of field ``f``."""
+        return self.nf.c_type if f.kind == REAL else "uint16_t"
+
+    @cached_property
+    def dtype(self) -> np.dtype:
+        """numpy structured dtype laid out like the C struct (natural alignment)."""
+        spec = [(f.name, self.np_type(f), (f.length,)) if f.length > 1 else (f.name, self.np_type(f))
+                for f in self.fields]
+        return np.dtype(spec, align=True)
+
+    @cached_property
+    def packed_dtype(self) -> np.dtype:
+        """Little-endian, unpadded dtype: the canonical byte layout."""
+        spec = [(f.name, self.np_type(f).newbyteorder("<"), (f.length,)) if f.length > 1
+                else (f.name, self.np_type(f).newbyteorder("<")) for f in self.fields]
+        return np.dtype(spec)
+
+    @cached_property
+    def members(self) -> tuple[CMember, ...]:
+        """C struct members in field order."""
+        return tuple(CMember(self.c_type(f), f.name, f.length, f.doc, f.kind,
+                             self.nf.literal(self.nf.const(0.0)) if f.kind == REAL else "0u")
+                     for f in self.fields)
+
+    @cached_property
+    def values(self) -> tuple[Value, ...]:
+        """The record flattened into 32-bit values, array fields element by element."""
+        out: list[Value] = []
+        for f in self.fields:
+            for s in ([f"[{j}]" for j in range(f.length)] if f.length > 1 else [""]):
+                if f.kind == REAL:
+                    out.append(Value(f.name + s, "MPC_VALUE_F32", f"mpc_f32_bits(REC->{f.name}{s})"))
+                else:
+                    out.append(Value(f.name + s, "MPC_VALUE_U16", f"(uint32_t)REC->{f.name}{s}"))
+        return tuple(out)
+
+    @cached_property
+    def layout_hash(self) -> str:
+        """SHA-256 (hex, 16 chars) of the layout: record name, field names, kinds, C types, lengths."""
+        text = self.record.name + ";" + ";".join(
+            f"{f.name}:{f.kind}:{self.c_type(f)}:{f.length}" for f in self.fields)
+        return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+    def zeros(self, n: int) -> np.ndarray:
+        """``n`` zeroed records."""
+        return np.zeros(n, self.dtype)
+
+    def pack(self, records: np.ndarray) -> np.ndarray:
+        """(n, octets) uint8 array: each record's values, little-endian, no padding."""
+        packed = np.zeros(len(records), self.packed_dtype)
+        for f in self.fields:
+            packed[f.name] = records[f.name]
+        return packed.view(np.uint8).reshape(len(records), self.packed_dtype.itemsize)
+
+    def unpack(self, octets: bytes | np.ndarray, n: int | None = None) -> np.ndarray:
+        """Records (aligned dtype) from canonical bytes."""
+        buf = np.frombuffer(bytes(octets), dtype=self.packed_dtype, count=-1 if n is None else n)
+        out = self.zeros(len(buf))
+        for f in self.fields:
+            out[f.name] = buf[f.name]
+        return out
+
+    def crc(self, records: np.ndarray) -> int:
+        """CRC-32 of every value of every record (the firmware's crc_in / crc_out)."""
+        return zlib.crc32(self.pack(records).tobytes()) & 0xFFFFFFFF
+
+    def record_crcs(self, records: np.ndarray) -> list[int]:
+        """CRC-32 of each record's values (compact expected outputs)."""
+        return [zlib.crc32(row.tobytes()) & 0xFFFFFFFF for row in self.pack(records)]
+
+    def rows(self, records: np.ndarray) -> list[dict]:
+        """Plain Python rows (float32 values as exact Python floats), for templates."""
+        cols = {f.name: records[f.name].tolist() for f in self.fields}
+        return [{f.name: cols[f.name][i] for f in self.fields} for i in range(len(records))]
+
+
+#: Motor measurements every controller step takes first (every topology).
+MOTOR_INPUT_FIELDS: tuple[Field, ...] = (
+    Field("ia_a", REAL, 1, "sampled phase-a current, A"),
+    Field("ib_a", REAL, 1, "sampled phase-b current, A"),
+    Field("theta_e_rad", REAL, 1, "electrical rotor angle, rad (|x| <= angle guard)"),
+    Field("omega_e_rad_s", REAL, 1, "electrical rotor speed, rad/s"),
+)

@@ -1,0 +1,108 @@
+"""``mpcgen bench``: execution cost per step, every strategy side by side.
+
+Host: every strategy's compiled step runs over the same recorded trajectory
+(the conventional controller's closed-loop run of the config's scenario,
+80 000 samples for the SPMSM, as seed-001 section 7 does), in one process,
+interleaved, best of ``repeats``; reported as ns per step and the ratio to
+the first strategy (conventional / mpdtc27).  Absolute nanoseconds on a
+shared machine are noise; the ratios are the figure to compare with the
+seed's Table 11.  Also: closed-loop simulation throughput in periods/s.
+
+Emulated (``--emulated``): instructions per step on the emulated Cortex-M7
+(codegen.emulate), reported as instructions -- not cycles.
+"""
+from __future__ import annotations
+
+import time
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from codegen import __version__
+from codegen.model import Model
+from codegen.topology import topology_of
+
+
+def host_ns_per_step(libs: dict, states: np.ndarray, repeats: int) -> dict[str, float]:
+    """Best-of-``repeats`` ns per step, strategies interleaved in each round."""
+    best = {s: float("inf") for s in libs}
+    for _ in range(max(1, repeats)):
+        for s, lib in libs.items():
+            t0 = time.perf_counter_ns()
+            lib.step_batch(states)
+            dt = time.perf_counter_ns() - t0
+            best[s] = min(best[s], dt / len(states))
+    return best
+
+
+def emulated_instructions(model: Model, strategies: list[str], log: Callable[[str], None]) -> dict[str, dict]:
+    """Instructions per step on the emulated Cortex-M7 (QEMU -icount) for each strategy.
+
+    Each strategy's qemu-m7 image replays the same 2 000 states of the
+    baseline's recorded trajectory (two-level: the conventional closed-loop
+    run; three-level: the 27-MPDTC run at rated speed) and also runs the
+    bit-exact self-test;
+    a mismatch or a digest disagreement is an error, never a number.
+    """
+    import tempfile
+
+    from codegen.stages.emulate import EmulationError, run_and_check
+
+    out = {}
+    with tempfile.TemporaryDirectory(prefix="mpcgen-m7-") as tmp:
+        for s in strategies:
+            variant = model.with_controller(strategy=s)
+            log(f"emulated Cortex-M7: building and running {s} in QEMU")
+            r = run_and_check(variant, topology_of(variant).derive(variant), Path(tmp) / s, n_selftest=1000)
+            if r.mismatches or not r.digests_match:
+                raise EmulationError(f"{s}: emulated results differ from the reference ({r.mismatches} mismatches)")
+            out[s] = {"min": r.instr_min, "median": r.instr_median, "max": r.instr_max, "mean": r.instr_mean}
+    return out
+
+
+def bench(model: Model, strategies: list[str], emulated: bool = False, repeats: int = 5,
+          log: Callable[[str], None] = print) -> dict:
+    """Run the benchmark; returns the JSON-able result with a printable ``_table``."""
+    topo = topology_of(model)
+    traj = topo.trajectory(model, progress=lambda f: log(f"  recording trajectory {f:5.0%}"))
+    states, sim_wall, n_periods = traj.states, traj.wall_s, traj.periods
+    libs = {}
+    for s in strategies:
+        variant = model.with_controller(strategy=s)
+        libs[s] = topo.host_library(variant, topo.derive(variant))
+    log(f"timing {len(strategies)} strategies over {len(states)} recorded states, best of {repeats}")
+    ns = host_ns_per_step(libs, states, repeats)
+    base = strategies[0]
+    result: dict = {
+        "config": model.name, "config_hash": model.config_hash(), "version": __version__,
+        "trajectory_states": int(len(states)),
+        "sim_periods_per_s": n_periods / sim_wall if sim_wall > 0 else 0.0,
+        "baseline": base,
+        "strategies": {},
+    }
+    rows = [f"{'strategy':12s} {'host ns/step':>13s} {'ratio':>7s}" + ("  M7 instr/step (min/median/max)   ratio" if emulated else "")]
+    m7 = {}
+    if emulated:
+        m7 = emulated_instructions(model, strategies, log=log)
+    for s in strategies:
+        host_ratio = ns[s] / ns[base]
+        # with --emulated, ratio_to_conventional is the M7 instruction ratio (the issue's figure)
+        entry = {"host_ns_per_step": ns[s], "host_ns_ratio": host_ratio, "ratio_to_conventional": host_ratio}
+        line = f"{s:12s} {ns[s]:13.1f} {host_ratio:7.3f}"
+        if emulated:
+            st = m7[s]
+            m7_ratio = st["median"] / m7[base]["median"]
+            entry.update({
+                "m7_instructions_per_step": st["median"], "m7_instructions_min": st["min"],
+                "m7_instructions_max": st["max"], "m7_ratio_to_conventional": m7_ratio,
+                "ratio_to_conventional": m7_ratio,
+            })
+            line += f"  {st['min']:6.0f} / {st['median']:6.0f} / {st['max']:6.0f}   {m7_ratio:6.3f}"
+        result["strategies"][s] = entry
+        rows.append(line)
+    rows.append(f"closed-loop simulation ({model.name}, {base}): {result['sim_periods_per_s']:,.0f} periods/s")
+    if emulated:
+        rows.append("M7 figures are instruction counts on the emulated Cortex-M7 (QEMU -icount), not cycles.")
+    result["_table"] = "\n".join(rows)
+    return result

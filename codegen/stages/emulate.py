@@ -1,0 +1,255 @@
+"""Run the qemu-m7 firmware headless in QEMU and read its self-test results.
+
+QEMU (``mps2-an500``, Cortex-M7) runs the ELF with semihosting (the firmware
+exits through SYS_EXIT_EXTENDED) and ``-icount shift=N``, under which SysTick
+counts exactly ``instructions * 2**N / 40`` ticks (shared/spec/targets.md;
+every image re-checks this with its CAL line: a 1024-NOP sled must take
+1024 instructions).  The UART goes to a file; QEMU runs in its own process
+group, under a timeout, and is always killed by its id.
+
+``measure_strategies`` builds, runs and checks one image per strategy and
+returns per-strategy counts: states, mismatches, and the instructions per
+step (min/median/max) over the bench set, a recorded closed-loop trajectory.
+"""
+from __future__ import annotations
+
+import os
+import re
+import signal
+import subprocess
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from codegen.errors import MpcgenError
+from codegen.stages.firmware import QEMU, build_firmware, make_test_sets, require_tools, write_firmware_project
+from codegen.stages.fwdata import layouts
+from codegen.topology import topology_of
+from codegen.model import Model
+
+#: Default -icount shift: 25.6 SysTick ticks per instruction.
+ICOUNT_SHIFT = 10
+#: SysTick clock of mps2-an500 (processor clock, CLKSOURCE=1).
+SYSTICK_HZ = 25_000_000
+
+
+class EmulationError(MpcgenError):
+    """QEMU failed, timed out, or the firmware's output is wrong or incomplete."""
+
+
+@dataclass
+class QemuRun:
+    """One QEMU run: exit status (None if killed), UART text, QEMU's own output."""
+
+    returncode: int | None
+    uart: str
+    stderr: str
+    timed_out: bool
+    pid: int
+
+
+def qemu_command(elf: Path, uart_log: Path, icount_shift: int = ICOUNT_SHIFT) -> list[str]:
+    """The QEMU command line (targets.md): headless, semihosting, -icount, UART0 to a file."""
+    return ["qemu-system-arm", "-M", "mps2-an500", "-cpu", "cortex-m7", "-m", "16M",
+            "-display", "none", "-monitor", "none",
+            "-semihosting-config", "enable=on,target=native",
+            "-icount", f"shift={icount_shift}", "-kernel", str(elf), "-serial", f"file:{uart_log}"]
+
+
+def _kill_group(proc: subprocess.Popen) -> None:
+    """Kill QEMU's process group (it was started in its own session) and reap it."""
+    if proc.poll() is None:
+        try:
+            os.killpg(proc.pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+    proc.wait()
+
+
+def run_qemu(elf: Path, *, timeout_s: float = 120.0, icount_shift: int = ICOUNT_SHIFT) -> QemuRun:
+    """Run ``elf`` until it exits (semihosting) or ``timeout_s`` passes; QEMU is always ended."""
+    require_tools((QEMU,))
+    elf = Path(elf)
+    if not elf.is_file():
+        raise EmulationError(f"firmware image {elf} does not exist: build the qemu-m7 project first")
+    with tempfile.TemporaryDirectory(prefix="mpcgen-qemu-") as tmp:
+        uart = Path(tmp) / "uart.log"
+        proc = subprocess.Popen(qemu_command(elf, uart, icount_shift), stdin=subprocess.DEVNULL,
+                                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, start_new_session=True)
+        timed_out = False
+        out = b""
+        try:
+            out, _ = proc.communicate(timeout=timeout_s)
+        except subprocess.TimeoutExpired:
+            timed_out = True
+        finally:
+            _kill_group(proc)
+            if proc.stdout is not None:
+                proc.stdout.close()
+        text = uart.read_text(errors="replace") if uart.exists() else ""
+    return QemuRun(None if timed_out else proc.returncode, text.replace("\r", ""),
+                   out.decode(errors="replace"), timed_out, proc.pid)
+
+
+# ---------------------------------------------------------------- parsing
+
+_KV = re.compile(r"(\w+)=(\S+)")
+
+
+@dataclass
+class SetResult:
+    """A SUMMARY line with the set's CYC values and detail lines."""
+
+    name: str
+    n: int
+    mismatches: int
+    crc_in: int
+    crc_out: int
+    cyc_min: int
+    cyc_max: int
+    cyc_mean: int
+    overhead: int
+    unit: str
+    cycles: list[int] = field(default_factory=list)
+    details: list[str] = field(default_factory=list)
+
+
+@dataclass
+class ConsoleReport:
+    """Everything the firmware printed, parsed."""
+
+    hello: dict[str, str]
+    cal: dict[str, int]
+    sets: dict[str, SetResult]
+    result: str | None
+    exit_code: int | None
+    errors: list[str]
+
+
+def parse_console(text: str) -> ConsoleReport:
+    """Parse the runtime's console lines (firmware/runtime/selftest.h documents them)."""
+    hello: dict[str, str] = {}
+    cal: dict[str, int] = {}
+    sets: dict[str, SetResult] = {}
+    cycles: dict[str, list[int]] = {}
+    details: dict[str, list[str]] = {}
+    current = ""
+    result = None
+    exit_code = None
+    errors: list[str] = []
+    for line in text.splitlines():
+        word, _, rest = line.partition(" ")
+        kv = dict(_KV.findall(rest))
+        if word == "HELLO":
+            hello = kv
+        elif word == "CAL":
+            cal = {k: int(v) for k, v in kv.items()}
+        elif word == "SET":
+            current = kv.get("name", "")
+            cycles[current], details[current] = [], []
+        elif word == "CYC":
+            cycles.setdefault(current, []).extend(int(v) for v in rest.split())
+        elif word in ("MISMATCH", "STATE", "OUT"):
+            details.setdefault(kv.get("set", current), []).append(line)
+        elif word == "SUMMARY":
+            name = kv["set"]
+            sets[name] = SetResult(name, int(kv["n"]), int(kv["mismatches"]), int(kv["crc_in"], 16),
+                                   int(kv["crc_out"], 16), int(kv["cyc_min"]), int(kv["cyc_max"]),
+                                   int(kv["cyc_mean"]), int(kv["overhead"]), kv["unit"],
+                                   cycles.get(name, []), details.get(name, []))
+        elif word == "RESULT":
+            result = rest.split()[0] if rest else ""
+        elif word == "EXIT":
+            exit_code = int(kv.get("code", "-1"))
+        elif word in ("ERROR", "FAULT"):
+            errors.append(line)
+    return ConsoleReport(hello, cal, sets, result, exit_code, errors)
+
+
+def ticks_to_instructions(ticks: np.ndarray | int, icount_shift: int = ICOUNT_SHIFT) -> np.ndarray:
+    """SysTick ticks under -icount shift=N -> instructions (ticks * 40 / 2**N)."""
+    return np.asarray(ticks, dtype=np.float64) * (1e9 / SYSTICK_HZ) / float(2 ** icount_shift)
+
+
+def check_calibration(report: ConsoleReport, icount_shift: int = ICOUNT_SHIFT) -> float:
+    """Instructions measured for the CAL NOP sled; EmulationError if not the sled's length (+-0.5)."""
+    if "nops" not in report.cal or "ticks" not in report.cal:
+        raise EmulationError("the firmware printed no CAL line (SysTick calibration)")
+    measured = float(ticks_to_instructions(report.cal["ticks"], icount_shift))
+    if abs(measured - report.cal["nops"]) > 0.5:
+        raise EmulationError(f"SysTick scaling check failed: {report.cal['nops']} NOPs measured as "
+                             f"{measured:.2f} instructions at -icount shift={icount_shift}")
+    return measured
+
+
+# ---------------------------------------------------------------- per strategy
+
+@dataclass
+class StrategyCounts:
+    """Result of one strategy's image in QEMU."""
+
+    strategy: str
+    states: int  # states checked on target (all sets)
+    mismatches: int
+    bench_states: int
+    instr_min: float
+    instr_median: float
+    instr_max: float
+    instr_mean: float
+    digests_match: bool
+    uart: str = ""
+
+
+def run_and_check(model: Model, tables: Any, workdir: Path, *, n_selftest: int = 10000,
+                  n_bench: int = 2000, icount_shift: int = ICOUNT_SHIFT, timeout_s: float = 300.0) -> StrategyCounts:
+    """Write, build and run one qemu-m7 image; check it against the reference; count instructions.
+
+    The firmware compares every output with its embedded expected outputs;
+    independently, the host recomputes the CRC-32 of all inputs and outputs
+    from the Python reference and compares it with the firmware's digests.
+    Either topology (``tables``: TwoLevelTables or ThreeLevelTables to match
+    ``model.inverter.topology``); the bench set is the topology's recorded
+    trajectory (three-level: the 27-MPDTC run at rated speed).
+    """
+    inp, out = layouts(model)
+    workdir = Path(workdir)
+    write_firmware_project(model, tables, "qemu-m7", workdir, n_selftest, n_bench=n_bench)
+    build = build_firmware(workdir, "qemu-m7")
+    run = run_qemu(build.image, timeout_s=timeout_s, icount_shift=icount_shift)
+    if run.timed_out:
+        raise EmulationError(f"QEMU did not finish within {timeout_s} s (killed); last output: {run.uart[-300:]!r}")
+    rep = parse_console(run.uart)
+    check_calibration(rep, icount_shift)
+    if rep.hello.get("config") != model.config_hash():
+        raise EmulationError(f"image reports config {rep.hello.get('config')}, expected {model.config_hash()}")
+    ok = True
+    for ts in make_test_sets(model, tables, n_selftest, n_bench):
+        got = rep.sets.get(ts.name)
+        if got is None:
+            raise EmulationError(f"no SUMMARY for set {ts.name}; output ends {run.uart[-300:]!r}")
+        ok &= (got.n == len(ts.states) and got.crc_in == inp.crc(ts.states)
+               and got.crc_out == out.crc(ts.expected))
+    bench = rep.sets.get("bench")
+    instr = ticks_to_instructions(bench.cycles if bench else [0], icount_shift)
+    return StrategyCounts(tables.strategy, sum(s.n for s in rep.sets.values()),
+                          sum(s.mismatches for s in rep.sets.values()), len(instr),
+                          round(float(instr.min()), 1), round(float(np.median(instr)), 1),
+                          round(float(instr.max()), 1), round(float(instr.mean()), 1),
+                          ok and run.returncode == 0, run.uart)
+
+
+def measure_strategies(config: str | Path, workdir: Path, strategies: tuple[str, ...] | None = None,
+                       overrides: dict[str, object] | None = None, **kwargs: object) -> dict[str, StrategyCounts]:
+    """Per-strategy counts for the config (every strategy of its topology by default)."""
+    from codegen.config import load_config
+
+    base = load_config(config, overrides)
+    topo = topology_of(base)
+    out = {}
+    for s in strategies or topo.strategies:
+        m = base.with_controller(strategy=s)
+        out[s] = run_and_check(m, topo.derive(m), Path(workdir) / s, **kwargs)  # type: ignore[arg-type]
+    return out

@@ -1,0 +1,68 @@
+"""Test data embedded in a firmware image: states, expected outputs, digests.
+
+The self-test set is the topology's deterministic mix of guard cases and
+random/adversarial states (:meth:`~codegen.topology.Topology.selftest_states`);
+the bench set is its recorded closed-loop trajectory, evenly sampled.
+Expected outputs always come from the Python reference.  Digests: CRC-32
+(zlib) of every value in record order, in the canonical little-endian layout
+of :class:`codegen.records.RecordLayout` (the firmware's ``mpc_values_crc``).
+"""
+from __future__ import annotations
+
+import fcntl
+from typing import Any
+
+import numpy as np
+
+from codegen.hostbuild import cache_root
+from codegen.model import Model
+from codegen.numfmt import number_format
+from codegen.records import REAL, RecordLayout
+from codegen.topology import Topology, topology_of
+
+__all__ = ["SELFTEST_SEED", "layouts", "selftest_states", "trajectory_states", "expected_outputs",
+           "evenly_spaced"]
+
+#: Seed of the self-test states (the set is a pure function of config and n).
+SELFTEST_SEED = 20240604
+
+
+def layouts(model: Model) -> tuple[RecordLayout, RecordLayout]:
+    """The step's input and output records in the model's number format."""
+    topo = topology_of(model)
+    nf = number_format(model.controller.number_format)
+    return topo.input_record.bind(nf), topo.output_record.bind(nf)
+
+
+def selftest_states(model: Model, tables: Any, n: int, seed: int = SELFTEST_SEED) -> np.ndarray:
+    """``n`` deterministic self-test states of the model's topology (guard cases first)."""
+    return topology_of(model).selftest_states(model, tables, n, seed)
+
+
+def evenly_spaced(x: np.ndarray, n: int) -> np.ndarray:
+    """``n`` records (at most ``len(x)``) evenly spaced over ``x``, first and last included."""
+    idx = np.linspace(0, len(x) - 1, num=min(n, len(x))).round().astype(np.intp)
+    return x[idx]
+
+
+def trajectory_states(model: Model, n: int) -> np.ndarray:
+    """``n`` states evenly spaced over the topology's recorded benchmark trajectory.
+
+    The host build is taken under a file lock: parallel test workers share
+    the build cache.
+    """
+    topo = topology_of(model)
+    cache_root().mkdir(parents=True, exist_ok=True)
+    with open(cache_root() / f"{model.prefix}.trajectory.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        traj = topo.trajectory(model)
+    return evenly_spaced(traj.states, n)
+
+
+def expected_outputs(topo: Topology, tables: Any, states: np.ndarray) -> np.ndarray:
+    """The reference's outputs; every real output must be finite (an input-guard bug otherwise)."""
+    out = topo.step_batch(tables, states)
+    for f in topo.output_record.fields:
+        if f.kind == REAL and not np.all(np.isfinite(out[f.name])):
+            raise ValueError(f"reference output {f.name} is not finite for some state (input guard bug)")
+    return out

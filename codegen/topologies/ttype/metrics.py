@@ -1,0 +1,325 @@
+"""Metrics of closed-loop three-level (T-type) runs.
+
+Definitions (shared/spec/plant-and-metrics.md "Metrics", mpdtc-three-level.md):
+
+* ``T_rip_RMSE = sqrt(mean((Te - T*)^2))`` (plant Te at the sample instants,
+  T* the reference given to the controller).
+* ``psi_rip_RMSE = sqrt(mean((|psi_s| - psi*)^2))`` with psi* the
+  CONTROLLER's flux reference of the same period (``trace.psi_ref_wb``; the
+  three-level psi* follows T* by MTPA, so it is not a constant).
+* ``THD_ia``: :func:`codegen.metrics.thd` of i_a (harmonics up to 10 kHz or
+  fs/2) over the last steady window with nonzero speed.
+* ``Vo_std``, ``Vo_pp``, ``Vo_mean``: neutral-point voltage V_o = (u_c1 -
+  u_c2)/2 of the plant at the sample instants, over the steady windows.
+* ``THD_uab``: THD of the switched line voltage u_ab at sub-period
+  resolution.  The piecewise-constant waveform (one value per applied
+  segment, zero-length segments skipped) is resampled onto a uniform grid of
+  about ``uab_grid_s`` = 1 us by exact box averaging (the mean of the
+  waveform over each grid cell, from its cumulative integral), with the grid
+  step adjusted so that one fundamental period holds an integer number P of
+  cells; the FFT covers the largest integer number of fundamental periods in
+  the THD window; harmonics h = 2 .. h_max with h_max*f1 <= ``uab_f_max_hz``
+  = 50 kHz (well below the grid's Nyquist frequency of ~500 kHz).
+* Line-voltage jumps: every boundary between consecutive applied segments
+  (including period boundaries and the boundary from the state before the
+  counted range; the inverter starts in OOO, u_ab = 0), |du_ab| / (Udc/2)
+  rounded to the nearest integer and clipped to 0..4.  ``jump_hist_udc2[m]``
+  counts the boundaries with m units; index 0 counts boundaries where the
+  line-voltage level did not change (only V_o drift).
+  ``max_line_jump_udc2`` = the largest m >= 1 that occurred (0: none).
+* ``f_ave_hz``: one-level leg changes per second per leg: sum over the run
+  of the per-period leg-level changes (|S_x(i) - S_x(i-1)| summed over legs
+  and consecutive non-empty segments, period boundaries included) / (3 t).
+* ``Cal_ave``: evaluated candidates per step (``n_eval``), averaged.
+
+Windows: as :func:`codegen.metrics.two_level_metrics` -- RMSE, f_ave, Cal_ave
+and the jump histogram over the whole run (or ``stats_window``); std/pp of the
+ripples and V_o over the steady windows (last ``window_s`` of each
+constant-reference segment).
+"""
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from codegen.metrics import (
+    GRID_TOL,
+    fundamental_hz,
+    ripple_stats,
+    ripple_summary,
+    sample_time,
+    steady_windows,
+    thd,
+    thd_window,
+    window_mask,
+    window_slice,
+)
+from codegen.model import Model
+
+if TYPE_CHECKING:  # pragma: no cover
+    from codegen.topologies.ttype.sim import Trace3
+
+__all__ = [
+    "UAB_GRID_S",
+    "UAB_F_MAX_HZ",
+    "resample_piecewise",
+    "uab_thd",
+    "line_jump_histogram",
+    "leg_level_changes",
+    "three_level_metrics",
+]
+
+#: Nominal grid of the u_ab resampling (adjusted to P whole cells per fundamental period).
+UAB_GRID_S = 1e-6
+#: Highest harmonic frequency counted in THD_uab.
+UAB_F_MAX_HZ = 50e3
+_OOO = 13
+
+
+def _levels(states: np.ndarray) -> np.ndarray:
+    s = np.asarray(states, dtype=np.int64)
+    return np.stack([s // 9 - 1, (s // 3) % 3 - 1, s % 3 - 1], axis=-1)
+
+
+# ---------------------------------------------------------------------------
+# switched waveform
+# ---------------------------------------------------------------------------
+def resample_piecewise(values: Any, durations: Any, dt_grid: float, n_samples: int) -> np.ndarray:
+    """Box-average a piecewise-constant waveform onto a uniform grid.
+
+    ``values[i]`` holds for ``durations[i]`` seconds (consecutive, starting at
+    t = 0; zero-length entries contribute nothing).  Sample j is the mean of
+    the waveform over [j*dt_grid, (j+1)*dt_grid), computed exactly from the
+    piecewise-linear cumulative integral.  The waveform must cover
+    n_samples*dt_grid (up to rounding; beyond its end it is held).
+    """
+    v = np.asarray(values, dtype=np.float64).ravel()
+    d = np.asarray(durations, dtype=np.float64).ravel()
+    if v.shape != d.shape:
+        raise ValueError("values and durations differ in shape")
+    if np.any(d < 0) or not np.all(np.isfinite(d)):
+        raise ValueError("durations must be finite and >= 0")
+    keep = d > 0
+    v, d = v[keep], d[keep]
+    if v.size == 0:
+        raise ValueError("empty waveform")
+    ends = np.concatenate(([0.0], np.cumsum(d)))
+    area = np.concatenate(([0.0], np.cumsum(v * d)))
+    t = np.arange(n_samples + 1, dtype=np.float64) * dt_grid
+    if t[-1] > ends[-1] * (1 + 1e-9):
+        raise ValueError(f"waveform covers {ends[-1]:.6g} s, grid needs {t[-1]:.6g} s")
+    # hold the last value past the end (rounding only)
+    big = t[-1] + 1.0
+    ends = np.append(ends, big)
+    area = np.append(area, area[-1] + v[-1] * (big - ends[-2]))
+    f = np.interp(t, ends, area)
+    return np.diff(f) / dt_grid
+
+
+def uab_thd(
+    trace: "Trace3",
+    t0: float,
+    t1: float,
+    f1_hz: float,
+    grid_s: float = UAB_GRID_S,
+    f_max_hz: float = UAB_F_MAX_HZ,
+) -> tuple[float, dict[str, Any]]:
+    """THD (percent) of the switched u_ab over whole fundamental periods in [t0, t1).
+
+    See the module docstring.  Returns (THD, info) with the window, number of
+    periods, grid step, cells per period and harmonic range.  Raises
+    ValueError when not even one fundamental period fits.
+    """
+    if not (f1_hz > 0 and math.isfinite(f1_hz)):
+        raise ValueError(f"fundamental frequency must be positive, got {f1_hz!r}")
+    dt = trace.dt_s
+    sl = window_slice(dt, t0, t1, trace.n)
+    span = (sl.stop - sl.start) * dt
+    n_per = int(math.floor(span * f1_hz + GRID_TOL))
+    if n_per < 1:
+        raise ValueError(f"window [{t0}, {t1}) s is shorter than one fundamental period ({1 / f1_hz:.4g} s)")
+    cells = max(2, int(round(1.0 / (f1_hz * grid_s))))
+    dt_grid = 1.0 / (f1_hz * cells)
+    m = n_per * cells
+    need = m * dt_grid
+    k_end = min(sl.stop, sl.start + int(math.ceil(need / dt - GRID_TOL)) + 1)
+    x = resample_piecewise(trace.uab_v[sl.start:k_end], trace.seg_s[sl.start:k_end], dt_grid, m)
+    value, info = thd(x, dt_grid, 0.0, m * dt_grid, f1_hz, f_max_hz)
+    info.update({
+        "t0_s": sample_time(sl.start, dt),
+        "t1_s": round(sl.start * dt + m * dt_grid, 12),
+        "grid_s": dt_grid,
+        "cells_per_period": cells,
+        "resampling": "box average of the piecewise-constant segment waveform",
+    })
+    return value, info
+
+
+def line_jump_histogram(uab_v: Any, seg_s: Any, udc_v: float, uab_before: float | None = 0.0) -> dict[str, Any]:
+    """Histogram of |du_ab| between consecutive applied segments, in units of Udc/2.
+
+    ``uab_v``/``seg_s``: per-segment line voltage and duration (any shape,
+    read in order; zero-length segments skipped).  ``uab_before``: u_ab of
+    the segment before the first (0.0 = OOO at start-up; None: not counted).
+    Returns ``counts`` (index m = 0..4 units, m = round(|du|/(Udc/2)) clipped),
+    ``n_boundaries``, ``n_jumps`` (m >= 1) and ``max_udc2``.
+    """
+    v = np.asarray(uab_v, dtype=np.float64).ravel()
+    d = np.asarray(seg_s, dtype=np.float64).ravel()
+    v = v[d > 0]
+    if uab_before is not None:
+        v = np.concatenate(([float(uab_before)], v))
+    units = np.clip(np.rint(np.abs(np.diff(v)) / (0.5 * udc_v)), 0, 4).astype(np.int64)
+    counts = np.bincount(units, minlength=5)[:5]
+    nz = np.nonzero(counts[1:])[0]
+    return {
+        "counts": [int(c) for c in counts],
+        "n_boundaries": int(units.size),
+        "n_jumps": int(counts[1:].sum()),
+        "max_udc2": int(nz[-1] + 1) if nz.size else 0,
+    }
+
+
+def leg_level_changes(seg_states: Any, seg_s: Any, initial_state: int = _OOO) -> np.ndarray:
+    """Per-period one-level leg changes from (n, 7) applied states and durations.
+
+    Python cross-check of the C count (``trace.leg_changes``): sum over legs
+    of |S_x(i) - S_x(i-1)| over consecutive non-empty segments, the first
+    compared with the last non-empty segment of the previous period
+    (``initial_state`` before the first period).
+    """
+    st = np.asarray(seg_states, dtype=np.int64)
+    d = np.asarray(seg_s, dtype=np.float64)
+    n = st.shape[0]
+    flat_st, flat_d = st.ravel(), d.ravel()
+    period = np.repeat(np.arange(n), st.shape[1])
+    keep = flat_d > 0
+    s = np.concatenate(([int(initial_state)], flat_st[keep]))
+    lv = _levels(s)
+    steps = np.abs(np.diff(lv, axis=0)).sum(axis=1)
+    return np.bincount(period[keep], weights=steps, minlength=n).astype(np.int64)
+
+
+# ---------------------------------------------------------------------------
+# all three-level metrics of one run
+# ---------------------------------------------------------------------------
+def three_level_metrics(
+    trace: "Trace3",
+    model: Model,
+    stats_window: tuple[float, float] | None = None,
+    window_s: float = 0.2,
+    f_max_hz: float = 10e3,
+    uab_grid_s: float = UAB_GRID_S,
+    uab_f_max_hz: float = UAB_F_MAX_HZ,
+) -> dict[str, Any]:
+    """The three-level metric set of one closed-loop run (JSON-ready values)."""
+    dt, n = trace.dt_s, trace.n
+    windows = steady_windows(model, window_s)
+    psi_ref = trace.psi_ref_wb.astype(np.float64)
+
+    if stats_window is None:
+        run_mask = None
+        sl = slice(0, n)
+        run_desc = {"t0_s": 0.0, "t1_s": sample_time(n, dt), "n_samples": n, "description": "whole run"}
+        rip_mask = window_mask(n, dt, windows)
+        rip_desc = {
+            "windows_s": [[a, b] for a, b in windows],
+            "n_samples": int(np.count_nonzero(rip_mask)),
+            "description": f"steady windows: last {window_s:g} s of each constant-reference segment",
+        }
+        uab_before: float | None = 0.0  # OOO before the first period
+    else:
+        sl = window_slice(dt, stats_window[0], stats_window[1], n)
+        run_mask = np.zeros(n, dtype=bool)
+        run_mask[sl] = True
+        run_desc = {"t0_s": sample_time(sl.start, dt), "t1_s": sample_time(sl.stop, dt), "n_samples": sl.stop - sl.start,
+                    "description": "window given by the caller"}
+        rip_mask = run_mask
+        rip_desc = dict(run_desc)
+        uab_before = 0.0
+        if sl.start > 0:
+            prev_v = trace.uab_v[: sl.start].ravel()[trace.seg_s[: sl.start].ravel() > 0]
+            uab_before = float(prev_v[-1]) if prev_v.size else 0.0
+    t_run = (sl.stop - sl.start) * dt
+
+    vo = trace.vo_v if rip_mask is None else trace.vo_v[np.asarray(rip_mask)]
+    vo_stats = {
+        "std": float(np.std(vo)) if vo.size else math.nan,
+        "pp": float(np.ptp(vo)) if vo.size else math.nan,
+        "mean": float(np.mean(vo)) if vo.size else math.nan,
+    }
+
+    thd_ia, thd_uab = math.nan, math.nan
+    tw = thd_window(trace, model, window_s)  # type: ignore[arg-type]
+    if tw is None:
+        ia_info: dict[str, Any] = {"description": "no steady window with a nonzero speed reference"}
+        uab_info: dict[str, Any] = dict(ia_info)
+    else:
+        f1 = fundamental_hz(trace, model, *tw)
+        try:
+            thd_ia, ia_info = thd(trace.ia_a, dt, tw[0], tw[1], f1, f_max_hz)
+            ia_info["description"] = (
+                f"i_a over [{tw[0]:g}, {tw[1]:g}) s, {ia_info['n_periods']} fundamental periods, "
+                f"harmonics {ia_info['harmonics'][0]}..{ia_info['harmonics'][1]}"
+            )
+        except ValueError as exc:
+            ia_info = {"description": f"THD not computed: {exc}", "window_s": list(tw)}
+        try:
+            thd_uab, uab_info = uab_thd(trace, tw[0], tw[1], f1, uab_grid_s, uab_f_max_hz)
+            uab_info["description"] = (
+                f"switched u_ab over [{uab_info['t0_s']:g}, {uab_info['t1_s']:.6g}) s, "
+                f"{uab_info['n_periods']} fundamental periods, box-averaged onto a "
+                f"{uab_info['grid_s'] * 1e6:.4g} us grid, harmonics "
+                f"{uab_info['harmonics'][0]}..{uab_info['harmonics'][1]} (<= {uab_f_max_hz:g} Hz)"
+            )
+        except ValueError as exc:
+            uab_info = {"description": f"THD not computed: {exc}", "window_s": list(tw)}
+
+    jumps = line_jump_histogram(trace.uab_v[sl], trace.seg_s[sl], trace.udc_v, uab_before)
+    legs = int(np.sum(trace.leg_changes[sl], dtype=np.int64))
+
+    steady = []
+    for a, b in windows:
+        m = window_mask(n, dt, (a, b))
+        ts = ripple_stats(trace.te_nm, trace.torque_ref_nm, m)
+        ps = ripple_stats(trace.psi_wb, psi_ref, m)
+        v = trace.vo_v[m]
+        steady.append({
+            "t0_s": a, "t1_s": b,
+            "T_rip_RMSE": ts["rmse"], "T_rip_std": ts["std"], "T_rip_pp": ts["pp"],
+            "psi_rip_RMSE": ps["rmse"], "psi_rip_std": ps["std"], "psi_rip_pp": ps["pp"],
+            "Vo_std": float(np.std(v)) if v.size else math.nan,
+            "Vo_pp": float(np.ptp(v)) if v.size else math.nan,
+        })
+
+    return {
+        **ripple_summary(trace, psi_ref, run_mask, rip_mask),
+        "THD_ia": thd_ia,
+        "THD_uab": thd_uab,
+        "Vo_std": vo_stats["std"],
+        "Vo_pp": vo_stats["pp"],
+        "Vo_mean": vo_stats["mean"],
+        "jump_hist_udc2": jumps["counts"],
+        "max_line_jump_udc2": jumps["max_udc2"],
+        "f_ave_hz": legs / (3.0 * t_run) if t_run > 0 else math.nan,
+        "Cal_ave": float(np.mean(trace.n_eval[sl])) if sl.stop > sl.start else math.nan,
+        "window": {
+            "T_rip_RMSE": run_desc,
+            "psi_rip_RMSE": {**run_desc, "reference": "controller psi_ref_wb of each period"},
+            "f_ave_hz": {**run_desc, "definition": "one-level leg changes / (3 legs * t)"},
+            "Cal_ave": run_desc,
+            "jump_hist_udc2": {
+                **run_desc,
+                "definition": "boundaries between consecutive applied segments (period boundaries "
+                              "included), index m = round(|du_ab|/(Udc/2)); m = 0: no level change",
+                "n_boundaries": jumps["n_boundaries"],
+                "n_jumps": jumps["n_jumps"],
+            },
+            "ripple_std_pp_Vo": rip_desc,
+            "THD_ia": ia_info,
+            "THD_uab": uab_info,
+        },
+        "steady": steady,
+    }

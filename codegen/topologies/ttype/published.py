@@ -1,0 +1,137 @@
+"""Published data of seed 000 (Zheng Weijie et al., Chinese Journal of
+Scientific Instrument, 2023) as frozen fixtures, transcribed from the seed's
+text extraction.
+
+Nothing here is computed or corrected.  Each Table-3 row keeps the extracted
+text verbatim (``printed``, ``header_printed``) next to an ASCII transcription
+(``candidates``) in the notation used by ``codegen.topologies.ttype``:
+
+* ``u0`` .. ``u18``: basic vectors (u0 zero, u1..u6 small, u7.. large/medium);
+* ``u_s1``, ``u_m1``, ``u_L1``: a virtual vector without superscript;
+* ``u_s1^u2``: the version whose split (first) vector is u2 (the seed's
+  superscript).
+
+Extraction artefacts (kept as printed, noted in comments): ``00N``/``000``
+for OON/OOO in Table 2 (digit zero for the letter O); in the Table-3 row
+headers some subscripts are garbled (e.g. row u2 lists u_s2^u2 and u_s6^u2
+where the virtual vectors starting at u2 are u_s1^u2, u_s2^u2, u_m1^u2,
+u_m2^u2, u_L2, u_L3).
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+# ---------------------------------------------------------------------------
+# Table 1: output vector magnitudes (表1 T型三电平逆变器输出矢量幅值).
+# ---------------------------------------------------------------------------
+TABLE1_VECTOR_CLASSES: dict[str, tuple[str, ...]] = {
+    "large": ("PNN", "PPN", "PNP", "NNP", "NPN", "NPP"),  # 2Udc/3
+    "medium": ("PON", "PNO", "OPN", "ONP", "NOP", "NPO"),  # sqrt(3)Udc/3
+    "small": ("ONN", "PPO", "NON", "OPP", "NNO", "POP",
+              "POO", "OON", "OPO", "NOO", "OOP", "ONO"),  # Udc/3
+    "zero": ("OOO", "PPP", "NNN"),  # 0
+}
+
+
+# ---------------------------------------------------------------------------
+# Table 2: virtual vectors in sectors I and II (表2 第I、II扇区虚拟矢量).
+# ---------------------------------------------------------------------------
+class Table2Row(NamedTuple):
+    name: str  # ASCII name
+    printed: str  # sequence exactly as extracted ('0' = letter O)
+
+    @property
+    def sequence(self) -> str:
+        """The printed sequence with the digit 0 read as the letter O."""
+        return self.printed.replace("0", "O")
+
+
+TABLE2_SEQUENCES: tuple[Table2Row, ...] = (
+    Table2Row("u_s1^u1", "ONN-00N-000-POO-000-00N-ONN"),
+    Table2Row("u_s1^u2", "00N-000-POO-PPO-POO-000-00N"),
+    Table2Row("u_m1^u1", "ONN-00N-PON-POO-PON-00N-ONN"),
+    Table2Row("u_m1^u2", "00N-PON-POO-PPO-POO-PON-00N"),
+    Table2Row("u_L1", "ONN-PNN-PON-POO-PON-PNN-ONN"),
+    Table2Row("u_L2", "00N-PON-PPN-PPO-PPN-PON-00N"),
+)
+
+
+# ---------------------------------------------------------------------------
+# Table 3: prediction switch table, u* in sector I (表3 u_s^*位于第一扇区时预测开关表).
+# ---------------------------------------------------------------------------
+class Table3Row(NamedTuple):
+    prev: int  # basic-vector number of the row's previous vector (u<prev>)
+    header_printed: str  # previous-vector cell as extracted
+    printed: str  # candidate cell as extracted
+    candidates: tuple[str, ...]  # ASCII transcription, printed order
+
+
+TABLE3_SECTOR_I: tuple[Table3Row, ...] = (
+    Table3Row(0, "u_0", "u_0, u_{s1}, u_1, u_{m1}, u_{L1}",
+              ("u0", "u_s1", "u1", "u_m1", "u_L1")),
+    Table3Row(1, "u_1, u_{s1}^{u_1}, u_{m1}^{u_1}, u_{L1}^{u_1}, u_{s6}^{u_1}, u_{m6}^{u_1}, u_{L12}",
+              "u_0, u_1, u_{s1}, u_{m1}, u_{L1}, u_7, u_8",
+              ("u0", "u1", "u_s1", "u_m1", "u_L1", "u7", "u8")),
+    # header garbled: u_s2^u2 / u_s6^u2 / u_L2^u2 (virtual vectors starting at u2
+    # are u_s1^u2, u_s2^u2, u_m1^u2, u_m2^u2, u_L2, u_L3)
+    Table3Row(2, "u_2, u_{s2}^{u_2}, u_{m1}^{u_2}, u_{L2}^{u_2}, u_{s6}^{u_2}, u_{m2}^{u_2}, u_{L3}",
+              "u_0, u_{s1}, u_{m1}, u_{L1}, u_8",
+              ("u0", "u_s1", "u_m1", "u_L1", "u8")),
+    Table3Row(3, "u_3, u_{s3}^{u_3}, u_{m2}^{u_3}, u_{L4}^{u_3}, u_{s6}^{u_3}, u_{m3}^{u_3}, u_{L5}",
+              "u_0, u_{s2}^{u_2}, u_{m2}^{u_2}",
+              ("u0", "u_s2^u2", "u_m2^u2")),
+    # candidate cell identical to row u3's as printed
+    Table3Row(4, "u_4, u_{s4}^{u_4}, u_{m3}^{u_4}, u_{L6}^{u_4}, u_{s6}^{u_4}, u_{m4}^{u_4}, u_{L7}",
+              "u_0, u_{s2}^{u_2}, u_{m2}^{u_2}",
+              ("u0", "u_s2^u2", "u_m2^u2")),
+    # header lists u_L8 twice
+    Table3Row(5, "u_5, u_{s5}^{u_5}, u_{m4}^{u_5}, u_{L8}^{u_5}, u_{s6}^{u_5}, u_{m5}^{u_5}, u_{L8}",
+              "u_0, u_{s6}^{u_6}, u_{m6}^{u_6}",
+              ("u0", "u_s6^u6", "u_m6^u6")),
+    Table3Row(6, "u_6, u_{s6}^{u_6}, u_{m5}^{u_6}, u_{L10}^{u_6}, u_{s6}^{u_6}, u_{m6}^{u_6}, u_{L11}",
+              "u_0, u_1, u_{s1}^{u_1}, u_{m1}^{u_1}, u_{L1}",
+              ("u0", "u1", "u_s1^u1", "u_m1^u1", "u_L1")),
+    Table3Row(7, "u_7", "u_1, u_{s1}^{u_1}, u_{m1}^{u_1}, u_{L1}, u_7, u_8",
+              ("u1", "u_s1^u1", "u_m1^u1", "u_L1", "u7", "u8")),
+    Table3Row(8, "u_8", "u_1, u_{s1}, u_{m1}, u_{L1}, u_7, u_8",
+              ("u1", "u_s1", "u_m1", "u_L1", "u7", "u8")),
+    Table3Row(9, "u_9", "u_{s1}^{u_2}, u_{m1}^{u_2}, u_8",
+              ("u_s1^u2", "u_m1^u2", "u8")),
+    Table3Row(10, "u_{10}", "u_2, u_{s1}^{u_2}, u_{m1}^{u_2}, u_{L2}, u_9",
+              ("u2", "u_s1^u2", "u_m1^u2", "u_L2", "u9")),
+    Table3Row(11, "u_{11}", "u_{s2}^{u_3}, u_{m2}^{u_3}, u_{10}",
+              ("u_s2^u3", "u_m2^u3", "u10")),
+    Table3Row(12, "u_{12}", "u_3, u_{s2}^{u_3}, u_{m2}^{u_3}, u_{L4}, u_{11}",
+              ("u3", "u_s2^u3", "u_m2^u3", "u_L4", "u11")),
+    # 'u_{L2}' breaks the pattern of the neighbouring rows (u12 expected)
+    Table3Row(13, "u_{13}", "u_{s3}^{u_4}, u_{m3}^{u_4}, u_{L2}",
+              ("u_s3^u4", "u_m3^u4", "u_L2")),
+    Table3Row(14, "u_{14}", "u_5, u_{s5}, u_{m5}, u_{L9}, u_{15}",
+              ("u5", "u_s5", "u_m5", "u_L9", "u15")),
+    Table3Row(15, "u_{15}", "u_{s5}^{u_5}, u_{m5}^{u_5}, u_{16}",
+              ("u_s5^u5", "u_m5^u5", "u16")),
+    Table3Row(16, "u_{16}", "u_6, u_{s6}^{u_6}, u_{m6}^{u_6}, u_{L11}, u_{17}",
+              ("u6", "u_s6^u6", "u_m6^u6", "u_L11", "u17")),
+    Table3Row(17, "u_{17}", "u_{s6}^{u_6}, u_{m6}^{u_6}, u_{18}",
+              ("u_s6^u6", "u_m6^u6", "u18")),
+    Table3Row(18, "u_{18}", "u_1, u_{s1}^{u_1}, u_{m1}^{u_1}, u_{L1}, u_7",
+              ("u1", "u_s1^u1", "u_m1^u1", "u_L1", "u7")),
+)
+
+
+# ---------------------------------------------------------------------------
+# Worked fallback example (section 2.2, 2)): previous vector u7 (large), u* in
+# sector 6 (VI) which offers nothing; sector 2 (II) is used instead:
+# "即 u_{s1}^{u_1}, u_{m1}^{u_1}, u_8".
+# ---------------------------------------------------------------------------
+class FallbackExample(NamedTuple):
+    prev: int  # basic-vector number
+    sector: int  # sector of u*, 0-based (VI -> 5)
+    used_sector: int  # 0-based (II -> 1)
+    candidates: tuple[str, ...]
+
+
+FALLBACK_EXAMPLE = FallbackExample(7, 5, 1, ("u_s1^u1", "u_m1^u1", "u8"))
+
+#: candidate counts stated in the text (寻优次数 "3 或 5 或 6 或 7")
+PUBLISHED_GROUP_COUNTS: tuple[int, ...] = (3, 5, 6, 7)

@@ -1,0 +1,81 @@
+"""The three-level MPDTC step's input and output records: one list, every layer.
+
+The generated C structs (templates/ttype), the numpy structured dtypes
+that carry batches through cffi and the Python reference
+(``codegen.topologies.ttype.reference``), and the plant simulator use these names.
+Field order here is the struct member order in C.
+
+Vector ids (``virtual.py``): 0..26 the switching states (index
+9*(Sa+1) + 3*(Sb+1) + (Sc+1): NNN = 0, OOO = 13, PPP = 26), 27..62 the 36
+virtual vectors.
+
+Segment convention of the decision (``states``/``seg_s``): the period is 7
+segments applied in order; the plant skips zero-length segments.
+- basic state s: states = [s, s, s, s, s, s, s], seg_s = [Ts, 0, 0, 0, 0, 0, 0]
+- virtual vector: states = its sequence [N, b, c, P, c, b, N],
+  seg_s = [T_N/2, Ts/6, Ts/6, Ts/3 - T_N, Ts/6, Ts/6, T_N/2]
+  (float32, so the sum equals Ts to within a few ulp, not exactly).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ...numfmt.float32 import FLOAT32
+from ...records import MOTOR_INPUT_FIELDS, REAL, U16, Field, Record
+
+#: segments per period (a virtual vector's 7-segment sequence)
+N_SEGMENTS = 7
+#: most costs a step evaluates: 19 voltage groups of 27-MPDTC (63-MPDTC: 3..7)
+N_MAX_EVAL = 19
+
+INPUT_FIELDS: tuple[Field, ...] = MOTOR_INPUT_FIELDS + (
+    Field("uc1_v", REAL, 1, "upper DC-link capacitor voltage, V"),
+    Field("uc2_v", REAL, 1, "lower DC-link capacitor voltage, V (Udc = uc1 + uc2, V_o = (uc1 - uc2)/2)"),
+    Field("torque_ref_nm", REAL, 1, "torque reference T*, N*m (speed-loop output)"),
+    Field("prev_vector", U16, 1, "vector id 0..62 applied in the current period"),
+    Field("t_n_prev_s", REAL, 1, "T_N of the current period, s (used if prev_vector is virtual)"),
+)
+
+OUTPUT_FIELDS: tuple[Field, ...] = (
+    Field("te_nm", REAL, 1, "predicted torque at k+1, N*m"),
+    Field("psi_wb", REAL, 1, "predicted stator-flux magnitude at k+1, Wb"),
+    Field("psi_ref_wb", REAL, 1, "flux reference psi* (MTPA), Wb"),
+    Field("vo_v", REAL, 1, "measured neutral-point voltage V_o(k) = (uc1 - uc2)/2, V"),
+    Field("vo_pred_v", REAL, 1, "predicted V_o(k+1) under the applied vector, V"),
+    Field("u_ref_alpha_v", REAL, 1, "deadbeat reference voltage u*, alpha, V"),
+    Field("u_ref_beta_v", REAL, 1, "deadbeat reference voltage u*, beta, V"),
+    Field("t_n_s", REAL, 1, "T_N of the chosen vector, s (0 for a basic state)"),
+    Field("cost_best", REAL, 1, "cost of the chosen candidate"),
+    Field("costs", REAL, N_MAX_EVAL, "cost of group j, evaluation order; 0 beyond n_eval"),
+    Field("seg_s", REAL, N_SEGMENTS, "segment times, s (sum Ts; see module doc)"),
+    Field("states", U16, N_SEGMENTS, "switching state 0..26 of each segment"),
+    Field("vector", U16, 1, "chosen vector id 0..62"),
+    Field("n_eval", U16, 1, "costs evaluated (= voltage groups of the row)"),
+    Field("n_groups", U16, 1, "voltage groups in the candidate row"),
+    Field("n_members", U16, 1, "candidate vectors whose V_o(k+2) was predicted"),
+    Field("sector", U16, 1, "12-sector of u*, 1-based (0: fault)"),
+    Field("fault", U16, 1, "fault bits (FAULT_* below); nonzero => safe decision"),
+    Field("cand", U16, N_MAX_EVAL, "resolved member (vector id) of group j; 0 beyond n_eval"),
+)
+
+#: Fault bits of the input guard (numerics.md "Inputs are guarded").
+FAULT_BITS: tuple[tuple[str, int, str], ...] = (
+    ("CURRENT", 1, "|i_a|, |i_b| or |i_c| above i_trip_a, or not finite"),
+    ("UDC_LOW", 2, "uc1 or uc2 below udc_min_v/2, or not finite"),
+    ("UDC_HIGH", 4, "uc1 or uc2 above udc_max_v/2, or not finite"),
+    ("ANGLE", 8, "|theta_e| above the angle guard, or not finite"),
+    ("SPEED", 16, "|omega_e| above the speed guard, or not finite"),
+    ("TORQUE_REF", 32, "|T*| above the torque-reference guard, or not finite"),
+    ("STATE", 64, "prev_vector is not a vector id 0..62"),
+    ("TN_PREV", 128, "prev_vector virtual and t_n_prev_s outside [0, Ts/3] or not finite"),
+)
+FAULT = {name: bit for name, bit, _ in FAULT_BITS}
+
+#: safe decision on a tripped guard: OOO for the whole period
+SAFE_STATE = 13
+
+#: numpy records laid out exactly like the C structs (checked against cffi at build time).
+INPUT = Record("ttype_input", INPUT_FIELDS)
+OUTPUT = Record("ttype_output", OUTPUT_FIELDS)
+INPUT_DTYPE: np.dtype = INPUT.bind(FLOAT32).dtype
+OUTPUT_DTYPE: np.dtype = OUTPUT.bind(FLOAT32).dtype

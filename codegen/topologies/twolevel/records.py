@@ -1,0 +1,60 @@
+"""The two-level controller step's input and output records: one list, every layer.
+
+The generated C structs (templates), the numpy structured dtypes that carry
+batches through cffi and the Python reference, and the firmware runtime all
+use these names.  Field order here is the struct member order in C.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ...numfmt.float32 import FLOAT32
+from ...records import MOTOR_INPUT_FIELDS, REAL, U16, Field, Record
+
+#: Number of basic voltage vectors V0..V6 (the most candidates a step can evaluate).
+N_VECTORS = 7
+
+
+INPUT_FIELDS: tuple[Field, ...] = MOTOR_INPUT_FIELDS + (
+    Field("udc_v", REAL, 1, "measured DC-link voltage, V"),
+    Field("torque_ref_nm", REAL, 1, "torque reference T*, N*m (speed-loop output)"),
+    Field("sw_prev", U16, 1, "switching state applied in the current period, Sa*4+Sb*2+Sc"),
+)
+
+OUTPUT_FIELDS: tuple[Field, ...] = (
+    Field("te_nm", REAL, 1, "estimated torque at k (k+1 with delay compensation), N*m"),
+    Field("psi_wb", REAL, 1, "estimated stator-flux magnitude at k (k+1), Wb"),
+    Field("psi_alpha_wb", REAL, 1, "stator flux alpha, Wb"),
+    Field("psi_beta_wb", REAL, 1, "stator flux beta, Wb"),
+    Field("sin_theta", REAL, 1, "sin(theta_e) from the generated polynomial"),
+    Field("cos_theta", REAL, 1, "cos(theta_e) from the generated polynomial"),
+    Field("cost_best", REAL, 1, "cost of the chosen candidate (0 if none evaluated)"),
+    Field("costs", REAL, N_VECTORS, "cost of candidate j, in evaluation order; 0 beyond n_eval"),
+    Field("sw", U16, 1, "chosen switching state Sa*4+Sb*2+Sc"),
+    Field("vector", U16, 1, "chosen vector index 0..6 (V0 realised as 000 or 111)"),
+    Field("n_eval", U16, 1, "costs evaluated in this step (Cal)"),
+    Field("fault", U16, 1, "fault bits (FAULT_* below); nonzero => safe decision"),
+    Field("sector", U16, 1, "flux sector used, 1-based (0: none used)"),
+    Field("condition", U16, 1, "table condition row used, 1-based (0: none)"),
+    Field("cand", U16, N_VECTORS, "candidate vector j in evaluation order; 0 beyond n_eval"),
+)
+
+#: Fault bits of the input guard (numerics.md "Inputs are guarded").
+FAULT_BITS: tuple[tuple[str, int, str], ...] = (
+    ("CURRENT", 1, "|i_a|, |i_b| or |i_c| above i_trip_a, or not finite"),
+    ("UDC_LOW", 2, "DC link below udc_min_v, or not finite"),
+    ("UDC_HIGH", 4, "DC link above udc_max_v, or not finite"),
+    ("ANGLE", 8, "|theta_e| above the angle guard, or not finite"),
+    ("SPEED", 16, "|omega_e| above the speed guard, or not finite"),
+    ("TORQUE_REF", 32, "|T*| above the torque-reference guard, or not finite"),
+    ("STATE", 64, "sw_prev is not a switching state 0..7"),
+)
+FAULT = {name: bit for name, bit, _ in FAULT_BITS}
+
+#: The step's records (one definition; every layout derives from these).
+INPUT = Record("twolevel_input", INPUT_FIELDS)
+OUTPUT = Record("twolevel_output", OUTPUT_FIELDS)
+#: numpy records of the float32 reference, laid out exactly like the C structs
+#: (checked against cffi at build time).
+INPUT_DTYPE: np.dtype = INPUT.bind(FLOAT32).dtype
+OUTPUT_DTYPE: np.dtype = OUTPUT.bind(FLOAT32).dtype

@@ -1,0 +1,69 @@
+"""Template context of the two-level step: values to print, already derived."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from codegen.model import Model
+from codegen.numfmt.float32 import FLOAT32
+from codegen.render import base_context, render_files
+from codegen.topologies.twolevel.derive import TwoLevelTables
+from codegen.topologies.twolevel.records import FAULT_BITS, INPUT, N_VECTORS, OUTPUT
+
+
+@dataclass(frozen=True)
+class _Row:
+    cells: tuple[int, ...]
+    label: str
+
+
+def _row_labels(t: TwoLevelTables) -> list[str]:
+    if t.n_sectors == 1:
+        return ["all candidates V0..V6"]
+    names = {
+        2: ["dT>0", "dT<0"],
+        4: ["dT>0 dpsi>0", "dT>0 dpsi<=0", "dT<0 dpsi>0", "dT<0 dpsi<=0"],
+    }[t.n_conditions]
+    return [f"{names[c]}, sector {s + 1}" for c in range(t.n_conditions) for s in range(t.n_sectors)]
+
+
+def two_level_context(model: Model, t: TwoLevelTables, target: str) -> dict:
+    """Template context: values to print, already derived."""
+    labels = _row_labels(t)
+    rows = [
+        _Row(tuple(r) + (0,) * (N_VECTORS - len(r)), f"{lab}: " + " ".join(f"V{v}" for v in r))
+        for r, lab in zip(t.rows, labels)
+    ]
+    nf = FLOAT32
+    return {
+        **base_context(model, target),
+        "strategy": t.strategy,
+        "predictor": t.predictor,
+        "delay_compensation": t.delay_compensation,
+        "consts": t.consts,
+        "ux": t.ux,
+        "uy": t.uy,
+        "vec_to_sw": t.vec_to_sw,
+        "sw_to_vec": t.sw_to_vec,
+        "zero_sw": t.zero_sw,
+        "n_sectors": t.n_sectors,
+        "uses_threshold": t.uses_threshold,
+        "rows": t.rows,
+        "rows_padded": rows,
+        "row_len": t.row_len,
+        "n_vectors": N_VECTORS,
+        "faults": FAULT_BITS,
+        "input_fields": INPUT.bind(nf).members,
+        "output_fields": OUTPUT.bind(nf).members,
+    }
+
+
+def render_two_level(model: Model, t: TwoLevelTables, target: str) -> dict[str, str]:
+    """File name -> text of the generated controller for ``target``."""
+    p = model.prefix
+    return render_files({f"{p}_mpc.h": "twolevel/mpc.h.j2", f"{p}_mpc.c": "twolevel/mpc.c.j2",
+                         "mpc_binding.h": "twolevel/binding.h.j2"}, two_level_context(model, t, target))
+
+
+def render_cdef(model: Model, t: TwoLevelTables) -> str:
+    """cffi declarations (no preprocessor lines) of the host build."""
+    return render_files({"cdef": "twolevel/cdef.h.j2"}, two_level_context(model, t, "host"))["cdef"]

@@ -1,0 +1,93 @@
+"""``mpcgen tables``: print the vector set and the switch tables.
+
+Two-level: ``--utilisation published`` derives the s2/s3 tables from the
+seed's published utilisation Tables 3-8 and compares them with the seed's
+published tables; ``--utilisation training`` derives them from a closed-loop
+training run of the conventional controller and prints the utilisation
+tables in the seed's layout.  Three-level: the derived sequences and the
+candidate table (codegen.topologies.ttype.report).
+"""
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+
+from codegen.model import Model
+from codegen.topologies.twolevel import published as pub
+from codegen.topologies.twolevel.utilisation import (
+    compare_tables,
+    format_comparison,
+    format_switch_table,
+    format_utilisation,
+    published_derivation_report,
+    published_utilisation,
+    utilisation_percent,
+)
+from codegen.topologies.twolevel.vectors import VEC_TO_SW, unit_vectors
+
+_S2_TITLES = ("Table 3 layout: utilisation, dT > eps_T", "Table 4 layout: utilisation, dT < -eps_T")
+_S3_TITLES = (
+    "Table 5 layout: dT > eps_T, dpsi > 0", "Table 6 layout: dT > eps_T, dpsi <= 0",
+    "Table 7 layout: dT < -eps_T, dpsi > 0", "Table 8 layout: dT < -eps_T, dpsi <= 0",
+)
+
+
+def vector_set_text() -> str:
+    """The two-level vector set, derived from the switching states."""
+    ux, uy = unit_vectors()
+    lines = ["Two-level vector set (u = 2/3 Udc (Sa + a Sb + a^2 Sc), shown / (2/3 Udc)):"]
+    for v, sw in enumerate(VEC_TO_SW):
+        ang = np.degrees(np.arctan2(uy[v], ux[v])) % 360 if v else 0.0
+        name = "000/111" if v == 0 else f"{sw:03b}"
+        lines.append(f"  V{v} {name:7s} alpha {ux[v]:+.4f} beta {uy[v]:+.4f} angle {ang:5.1f} deg")
+    return "\n".join(lines)
+
+
+def _utilisation_block(percent: np.ndarray, titles: tuple[str, ...]) -> list[str]:
+    out = []
+    for c, title in enumerate(titles):
+        out += [format_utilisation(percent[c].T, title), ""]
+    return out
+
+
+def two_level_tables_text(model: Model, source: str, log: Callable[[str], None]) -> str:
+    """Text for a two-level config."""
+    d = model.controller.derivation
+    parts = [vector_set_text(), ""]
+    if source == "published":
+        parts += ["Seed's published utilisation (eta_V, %):", ""]
+        parts += _utilisation_block(published_utilisation("s2"), _S2_TITLES)
+        parts += _utilisation_block(published_utilisation("s3"), _S3_TITLES)
+        parts.append(published_derivation_report(d.coverage, d.max_active)[0])
+        return "\n".join(parts)
+    from codegen.topologies.twolevel.switch_tables import derived_tables
+
+    log(f"training run: conventional controller over the {model.scenario.duration_s:g} s scenario of {model.name}")
+    s2, s3, counts = derived_tables(model, progress=lambda f: log(f"  training {f:5.0%}"))
+    n2 = int(counts["s2"].sum())
+    parts += [f"Utilisation from the training run ({n2} samples with |dT| > eps_T = {model.controller.eps_t_nm} N*m):", ""]
+    parts += _utilisation_block(utilisation_percent(counts["s2"]), _S2_TITLES)
+    parts += _utilisation_block(utilisation_percent(counts["s3"]), _S3_TITLES)
+    from codegen.topologies.twolevel.switch_tables import MIN_CELL_SAMPLES, thin_cells
+
+    for k in ("s2", "s3"):
+        thin = np.argwhere(thin_cells(counts[k]))
+        if len(thin):
+            cells = ", ".join(f"condition {c + 1} sector {s + 1}" for c, s in thin)
+            parts += [f"{k}: {len(thin)} cells have < {MIN_CELL_SAMPLES} active choices and take the seed-derived set: {cells}", ""]
+    parts += [f"s2 derived (coverage {d.coverage:.2f}, max_active {d.max_active}):", format_switch_table(s2, "s2"), ""]
+    parts += ["s2 vs the seed's published table:", format_comparison(compare_tables(s2, pub.PUBLISHED_S2), "s2"), ""]
+    parts += ["s3 derived:", format_switch_table(s3, "s3"), ""]
+    parts += ["s3 row dT>0,dpsi>0 vs the seed's published row:",
+              format_comparison(compare_tables((s3[0],), (pub.PUBLISHED_S3_ROW,)), "s3")]
+    return "\n".join(parts)
+
+
+def tables_text(model: Model, source: str, log: Callable[[str], None] = print) -> str:
+    """Dispatch on topology."""
+    if model.inverter.topology == "two-level":
+        return two_level_tables_text(model, source, log)
+    from codegen.topologies.ttype.tables_text import tables_report
+
+    return tables_report()

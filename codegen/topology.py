@@ -1,0 +1,132 @@
+"""The topology interface: what every inverter topology provides, and the registry.
+
+A topology (two-level, T-type) is a plugin package under
+``codegen/topologies/`` whose ``plugin`` module exports ``PLUGIN``, an object
+implementing :class:`Topology`.  The stages (generate, verify, simulate,
+bench, tables, firmware, hil) call only this interface and contain no
+topology branch: they take the plugin of the config's
+``inverter.topology`` from :func:`topology_of`.  A command a topology cannot
+serve raises :class:`codegen.errors.Unsupported` (exit code 2), never a
+fallback to another topology's code.
+
+Plugins are imported by name (``importlib``), so this module and the stages
+depend on no topology package.
+"""
+from __future__ import annotations
+
+import importlib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable, Protocol
+
+import numpy as np
+
+from codegen.hostbuild import HostLib
+from codegen.model import Model
+from codegen.records import Record
+
+__all__ = ["Topology", "Trajectory", "topology_of", "topology", "TOPOLOGIES"]
+
+Log = Callable[[str], None]
+Progress = Callable[[float], None]
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """Controller inputs recorded from a closed-loop run, with its wall time and length."""
+
+    states: np.ndarray
+    wall_s: float
+    periods: int
+
+
+class Topology(Protocol):
+    """One inverter topology: its strategies, tables, records, reference, plant, scenarios."""
+
+    #: ``inverter.topology`` value
+    name: str
+    #: what the generated step is, for reports ("two-level MPTC")
+    title: str
+    #: every strategy, in report order; the first is the baseline others are compared to
+    strategies: tuple[str, ...]
+    #: the step's records (every layout derives from them)
+    input_record: Record
+    output_record: Record
+    #: dotted name of the Python reference step (generated comments)
+    reference: str
+    #: what the recorded bench trajectory is
+    trajectory_doc: str
+
+    def derive(self, model: Model, progress: Progress | None = None) -> Any:
+        """The step's derived tables for ``model.controller.strategy`` (derived once)."""
+        ...
+
+    def render(self, model: Model, tables: Any, target: str) -> dict[str, str]:
+        """File name -> text of the generated C for ``target``."""
+        ...
+
+    def report(self, model: Model, tables: Any, target: str) -> str:
+        """Markdown report of the generated controller (constants, tables, guard, assumptions)."""
+        ...
+
+    def step_batch(self, tables: Any, states: np.ndarray) -> np.ndarray:
+        """The Python reference over a batch of input records."""
+        ...
+
+    def host_library(self, model: Model, tables: Any, with_sim: bool = False) -> HostLib:
+        """The generated C built for the host (+ the closed-loop simulator)."""
+        ...
+
+    def closed_loop_states(self, model: Model, lib: HostLib) -> np.ndarray:
+        """Controller inputs recorded from the variant's own closed-loop scenario run(s)."""
+        ...
+
+    def adversarial_states(self, model: Model, tables: Any, n: int) -> np.ndarray:
+        """About ``n`` adversarial states (borders, ties, guard limits, non-finite values)."""
+        ...
+
+    def random_states(self, model: Model, n: int, seed: int) -> np.ndarray:
+        """``n`` random states over (and a little beyond) the operating range."""
+        ...
+
+    def selftest_states(self, model: Model, tables: Any, n: int, seed: int) -> np.ndarray:
+        """``n`` deterministic firmware self-test states, guard cases first."""
+        ...
+
+    def trajectory(self, model: Model, progress: Progress | None = None) -> Trajectory:
+        """The baseline's recorded closed-loop run every strategy is benchmarked on."""
+        ...
+
+    def simulate(self, model: Model, strategies: list[str], plots: Path | None, log: Log) -> dict:
+        """The config's scenario for each strategy: JSON-ready metrics plus a printable ``_table``."""
+        ...
+
+    def sweep_eps(self, model: Model, eps_list: list[float], log: Log) -> dict:
+        """Torque-threshold sweep (``simulate --sweep-eps``), or Unsupported."""
+        ...
+
+    def tables_text(self, model: Model, source: str, log: Log) -> str:
+        """The derived switch tables and vector sets as text (``mpcgen tables``)."""
+        ...
+
+
+#: ``inverter.topology`` value -> module exporting ``PLUGIN``
+TOPOLOGIES: dict[str, str] = {
+    "two-level": "codegen.topologies.twolevel.plugin",
+    "t-type": "codegen.topologies.ttype.plugin",
+}
+
+
+def topology(name: str) -> Topology:
+    """The plugin of topology ``name``."""
+    try:
+        module = TOPOLOGIES[name]
+    except KeyError:
+        raise ValueError(f"unknown topology {name!r}; allowed: {', '.join(TOPOLOGIES)}") from None
+    plugin: Topology = importlib.import_module(module).PLUGIN
+    return plugin
+
+
+def topology_of(model: Model) -> Topology:
+    """The plugin of ``model.inverter.topology``."""
+    return topology(model.inverter.topology)
