@@ -22,11 +22,18 @@ CASES = [("seed001_spmsm", s) for s in ("conventional", "s1", "s2", "s3")] + \
         [("seed000_tlevel", s) for s in ("mpdtc27", "mpdtc63")]
 
 
+#: record fields renamed since the golden files were recorded (old name -> name now)
+RENAMED = {"sw_prev": "prev_sw", "te_nm": "te_est_nm", "psi_wb": "psi_est_wb"}
+
+
 def _golden(name: str, strategy: str) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
     z = np.load(GOLDEN / f"controller_{name}.npz")
-    ins = {k.split("/")[2]: z[k] for k in z.files if k.startswith(f"{strategy}/in/")}
-    outs = {k.split("/")[2]: z[k] for k in z.files if k.startswith(f"{strategy}/out/")}
-    return ins, outs
+
+    def part(kind: str) -> dict[str, np.ndarray]:
+        keys = [k for k in z.files if k.startswith(f"{strategy}/{kind}/")]
+        return {RENAMED.get(k.split("/")[2], k.split("/")[2]): z[k] for k in keys}
+
+    return part("in"), part("out")
 
 
 def _build(model):

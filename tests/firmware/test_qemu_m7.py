@@ -25,7 +25,7 @@ from fw_support import CASE_IDS, CASES, TLEVEL, example, needs_arm, needs_qemu
 N_SELFTEST = 10_000
 N_BENCH = 2_000
 #: a corrupted expectation per topology: (set index, field, record, element or None)
-CORRUPT = {"spmsm": ("s3", [(5, "te_nm", None), (7, "cand", 1)]),
+CORRUPT = {"spmsm": ("s3", [(5, "te_est_nm", None), (7, "cand", 1)]),
            "tlevel": ("mpdtc27", [(150, "costs", 18), (160, "cand", 3)])}
 
 

@@ -65,7 +65,7 @@ def test_full_scenario_follows_reference(full_run, spmsm_model):
     assert np.all(np.abs(tr.torque_ref_nm) <= 30.0)
     assert np.all(tr.fault == 0)
     assert np.all((tr.theta_e_rad >= 0) & (tr.theta_e_rad < 2 * np.pi))
-    np.testing.assert_array_equal(tr.sw_applied, tr.sw)  # no delay compensation
+    np.testing.assert_array_equal(tr.applied_sw, tr.sw)  # no delay compensation
     # read-only arrays: the trace is frozen
     with pytest.raises(ValueError):
         tr.te_nm[0] = 1.0
@@ -91,16 +91,16 @@ def test_chunked_equals_one_long_run(stub_lib, spmsm_model, full_run):
 
 def test_delay_compensation_timing(stub_lib, spmsm_model):
     ffi, lib = stub_lib
-    lib.stub_set_echo(4)  # te_est_nm = sw_prev as the step saw it
+    lib.stub_set_echo(4)  # te_est_nm = prev_sw as the step saw it
     try:
         for dc in (False, True):
             tr = run_closed_loop(ffi, lib, _short(spmsm_model, 0.05, delay_compensation=dc))
             prev = np.concatenate(([0], tr.sw[:-1]))
             np.testing.assert_array_equal(tr.te_est_nm, prev.astype(np.float32))
             if dc:  # decision of k acts during [k+1, k+2): applied = previous decision
-                np.testing.assert_array_equal(tr.sw_applied, prev)
+                np.testing.assert_array_equal(tr.applied_sw, prev)
             else:
-                np.testing.assert_array_equal(tr.sw_applied, tr.sw)
+                np.testing.assert_array_equal(tr.applied_sw, tr.sw)
             assert len(set(tr.sw.tolist())) > 3
     finally:
         lib.stub_set_echo(0)
@@ -144,10 +144,10 @@ def test_bad_parameters_raise(stub_lib, spmsm_model):
     p = params_from_model(ffi, spmsm_model)
     st = ffi.new("sim2l_state_t *")
     assert lib.sim2l_init(p, st) == 0
-    st.sw_prev = 9
+    st.prev_sw = 9
     ref = ffi.new("double[1]", [0.0])
     assert lib.sim2l_run(p, ref, ref, 1, ffi.NULL, st) == -1
-    st.sw_prev = 0
+    st.prev_sw = 0
     assert lib.sim2l_run(p, ref, ref, 1, ffi.NULL, st) == 0  # NULL trace: nothing recorded
     assert st.k == 1
 

@@ -54,14 +54,14 @@ def test_one_step_delay_timing(stub3):
     prev = np.concatenate(([13], tr.vector[:-1]))
     np.testing.assert_array_equal(tr.te_est_nm, prev.astype(np.float32))
     # the decision of k is applied during [k+1, k+2)
-    np.testing.assert_array_equal(tr.vector_applied, prev)
+    np.testing.assert_array_equal(tr.applied_vector, prev)
     assert np.all(tr.seg_states[0] == 13) and tr.seg_s[0, 0] == 50e-6
     # applied segments: the sum is the period; states/durations follow the applied vector
     np.testing.assert_allclose(tr.seg_s.sum(axis=1), 50e-6, rtol=1e-12, atol=0)
-    virt = tr.vector_applied >= 27
+    virt = tr.applied_vector >= 27
     assert np.all(np.count_nonzero(tr.seg_s[virt] > 0, axis=1) >= 5)
     basic = ~virt
-    np.testing.assert_array_equal(tr.seg_states[basic][:, 0], tr.vector_applied[basic])
+    np.testing.assert_array_equal(tr.seg_states[basic][:, 0], tr.applied_vector[basic])
     # T_N of the applied virtual vector: first and last segments are T_N/2
     tn = np.concatenate(([0.0], tr.t_n_s[:-1])).astype(np.float64)
     np.testing.assert_allclose(tr.seg_s[virt, 0], tn[virt] / 2, rtol=1e-6)
@@ -127,7 +127,7 @@ def test_throughput_seven_segments(stub3, capsys):
     tr = run_closed_loop3(ffi, lib, model)
     rate = tr.n / (time.perf_counter() - t)
     with capsys.disabled():
-        print(f"\nthree-level closed loop, stub 63-vector controller, {np.mean(tr.vector_applied >= 27):.0%} "
+        print(f"\nthree-level closed loop, stub 63-vector controller, {np.mean(tr.applied_vector >= 27):.0%} "
               f"seven-segment periods, 1 us RK4 sub-steps: {rate:,.0f} periods/s")
     assert rate >= 50_000
 

@@ -37,8 +37,8 @@ INPUT_FIELDS: tuple[Field, ...] = MOTOR_INPUT_FIELDS + (
 )
 
 OUTPUT_FIELDS: tuple[Field, ...] = (
-    Field("te_nm", REAL, 1, "predicted torque at k+1, N*m"),
-    Field("psi_wb", REAL, 1, "predicted stator-flux magnitude at k+1, Wb"),
+    Field("te_est_nm", REAL, 1, "predicted torque at k+1, N*m"),
+    Field("psi_est_wb", REAL, 1, "predicted stator-flux magnitude at k+1, Wb"),
     Field("psi_ref_wb", REAL, 1, "flux reference psi* (MTPA), Wb"),
     Field("vo_v", REAL, 1, "measured neutral-point voltage V_o(k) = (uc1 - uc2)/2, V"),
     Field("vo_pred_v", REAL, 1, "predicted V_o(k+1) under the applied vector, V"),

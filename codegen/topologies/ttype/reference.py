@@ -300,8 +300,8 @@ def _step(t: ThreeLevelTables, x: np.ndarray) -> np.ndarray:
     for i, val in enumerate((half_tn, k.TS6_S, k.TS6_S, tp, k.TS6_S, k.TS6_S, half_tn)):
         seg[:, i] = np.where(bvirt, val, k.TS_S if i == 0 else z)
 
-    out["te_nm"] = te
-    out["psi_wb"] = mag
+    out["te_est_nm"] = te
+    out["psi_est_wb"] = mag
     out["psi_ref_wb"] = psir
     out["vo_v"] = vo
     out["vo_pred_v"] = vo1

@@ -85,7 +85,7 @@ class Trace3:
     Per-period arrays (n,) are taken at the sample instant t_k = k*dt_s;
     plant quantities float64, controller outputs in their C types.
     ``vector``/``t_n_s`` are the decision of period k (applied during
-    [t_k+1, t_k+2)); ``vector_applied``, ``uab_v``, ``seg_s``, ``seg_states``
+    [t_k+1, t_k+2)); ``applied_vector``, ``uab_v``, ``seg_s``, ``seg_states``
     and ``leg_changes`` describe the period actually applied during
     [t_k, t_k+1).  Per-segment arrays have shape (n, 7); zero-length
     segments (``seg_s == 0``) were not applied.
@@ -113,7 +113,7 @@ class Trace3:
     psi_est_wb: np.ndarray  # float32
     psi_ref_wb: np.ndarray  # float32, the controller's flux reference
     vo_est_v: np.ndarray  # float32
-    vector_applied: np.ndarray
+    applied_vector: np.ndarray
     leg_changes: np.ndarray
     uab_v: np.ndarray  # (n, 7)
     seg_s: np.ndarray  # (n, 7)
@@ -152,7 +152,7 @@ _PER_PERIOD = {
     "vector": np.uint16, "n_eval": np.uint16, "fault": np.uint16,
     "t_n_s": np.float32, "te_est_nm": np.float32, "psi_est_wb": np.float32,
     "psi_ref_wb": np.float32, "vo_est_v": np.float32,
-    "vector_applied": np.uint16, "leg_changes": np.uint16,
+    "applied_vector": np.uint16, "leg_changes": np.uint16,
 }
 _PER_SEGMENT = {"uab_v": np.float64, "seg_s": np.float64, "seg_states": np.uint16}
 #: Trace members: (dtype, values per period).

@@ -38,7 +38,7 @@ def _records(ia, ib, th, om, udc, tref, sw) -> np.ndarray:
     x = np.zeros(n, INPUT_DTYPE)
     x["ia_a"], x["ib_a"], x["theta_e_rad"] = np.asarray(ia, F), np.asarray(ib, F), np.asarray(th, F)
     x["omega_e_rad_s"], x["udc_v"] = np.asarray(om, F), np.asarray(udc, F)
-    x["torque_ref_nm"], x["sw_prev"] = np.asarray(tref, F), np.asarray(sw, np.uint16)
+    x["torque_ref_nm"], x["prev_sw"] = np.asarray(tref, F), np.asarray(sw, np.uint16)
     return x
 
 
@@ -69,7 +69,7 @@ def _wide(model: Model, rng: np.random.Generator, n: int) -> np.ndarray:
 def _threshold(model: Model, t: TwoLevelTables, rng: np.random.Generator, n: int) -> np.ndarray:
     """T* = Te estimate +- eps_T, and one float32 step either side."""
     x = _operating(model, rng, n)
-    te = step_batch(t, x)["te_nm"]
+    te = step_batch(t, x)["te_est_nm"]
     eps = t.const("EPS_T_NM")
     sign = np.where(rng.integers(0, 2, n) == 0, F(1), F(-1))
     tref = (te + sign * eps).astype(F)
@@ -117,7 +117,7 @@ def guard_cases(model: Model) -> np.ndarray:
                 rows.append(r)
     for v in (g["UDC_MIN_V"], down(g["UDC_MIN_V"]), g["UDC_MAX_V"], up(g["UDC_MAX_V"])):
         rows.append(base[:4] + (v,) + base[5:])
-    # i_c alone above the trip limit; sw_prev out of range; speed zero and at the guard
+    # i_c alone above the trip limit; prev_sw out of range; speed zero and at the guard
     third = F(g["I_TRIP_A"] * F(0.5))
     rows.append((up(third), up(third)) + base[2:])
     rows += [base[:6] + (s,) for s in (8, 9, 255, 0xFFFF)]

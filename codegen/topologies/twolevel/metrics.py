@@ -69,7 +69,7 @@ def two_level_metrics(
             "n_samples": int(np.count_nonzero(rip_mask)),
             "description": f"steady windows: last {window_s:g} s of each constant-reference segment",
         }
-        sw_run, n_eval_run, t_run, sw0 = trace.sw_applied, trace.n_eval, n * dt, 0
+        sw_run, n_eval_run, t_run, sw0 = trace.applied_sw, trace.n_eval, n * dt, 0
     else:
         sl = window_slice(dt, stats_window[0], stats_window[1], n)
         run_mask = np.zeros(n, dtype=bool)
@@ -82,8 +82,8 @@ def two_level_metrics(
         }
         rip_mask = run_mask
         rip_desc = dict(run_desc)
-        sw_run, n_eval_run, t_run = trace.sw_applied[sl], trace.n_eval[sl], (sl.stop - sl.start) * dt
-        sw0 = int(trace.sw_applied[sl.start - 1]) if sl.start > 0 else 0
+        sw_run, n_eval_run, t_run = trace.applied_sw[sl], trace.n_eval[sl], (sl.stop - sl.start) * dt
+        sw0 = int(trace.applied_sw[sl.start - 1]) if sl.start > 0 else 0
 
 
     thd_value = math.nan

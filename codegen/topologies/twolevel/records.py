@@ -18,12 +18,12 @@ N_VECTORS = 7
 INPUT_FIELDS: tuple[Field, ...] = MOTOR_INPUT_FIELDS + (
     Field("udc_v", REAL, 1, "measured DC-link voltage, V"),
     Field("torque_ref_nm", REAL, 1, "torque reference T*, N*m (speed-loop output)"),
-    Field("sw_prev", U16, 1, "switching state applied in the current period, Sa*4+Sb*2+Sc"),
+    Field("prev_sw", U16, 1, "switching state applied in the current period, Sa*4+Sb*2+Sc"),
 )
 
 OUTPUT_FIELDS: tuple[Field, ...] = (
-    Field("te_nm", REAL, 1, "estimated torque at k (k+1 with delay compensation), N*m"),
-    Field("psi_wb", REAL, 1, "estimated stator-flux magnitude at k (k+1), Wb"),
+    Field("te_est_nm", REAL, 1, "estimated torque at k (k+1 with delay compensation), N*m"),
+    Field("psi_est_wb", REAL, 1, "estimated stator-flux magnitude at k (k+1), Wb"),
     Field("psi_alpha_wb", REAL, 1, "stator flux alpha, Wb"),
     Field("psi_beta_wb", REAL, 1, "stator flux beta, Wb"),
     Field("sin_theta", REAL, 1, "sin(theta_e) from the generated polynomial"),
@@ -47,7 +47,7 @@ FAULT_BITS: tuple[tuple[str, int, str], ...] = (
     ("ANGLE", 8, "|theta_e| above the angle guard, or not finite"),
     ("SPEED", 16, "|omega_e| above the speed guard, or not finite"),
     ("TORQUE_REF", 32, "|T*| above the torque-reference guard, or not finite"),
-    ("STATE", 64, "sw_prev is not a switching state 0..7"),
+    ("STATE", 64, "prev_sw is not a switching state 0..7"),
 )
 FAULT = {name: bit for name, bit, _ in FAULT_BITS}
 

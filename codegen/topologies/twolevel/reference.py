@@ -43,7 +43,7 @@ def guard(t: TwoLevelTables, x: np.ndarray) -> np.ndarray:
     fault |= np.where(np.abs(x["theta_e_rad"]) <= k.ANGLE_GUARD_RAD, 0, FAULT["ANGLE"]).astype(np.uint16)
     fault |= np.where(np.abs(x["omega_e_rad_s"]) <= k.OMEGA_GUARD_RAD_S, 0, FAULT["SPEED"]).astype(np.uint16)
     fault |= np.where(np.abs(x["torque_ref_nm"]) <= k.TORQUE_REF_GUARD_NM, 0, FAULT["TORQUE_REF"]).astype(np.uint16)
-    fault |= np.where(x["sw_prev"] <= 7, 0, FAULT["STATE"]).astype(np.uint16)
+    fault |= np.where(x["prev_sw"] <= 7, 0, FAULT["STATE"]).astype(np.uint16)
     return fault
 
 
@@ -94,7 +94,7 @@ def _step(t: TwoLevelTables, x: np.ndarray) -> np.ndarray:
     om = np.where(ok, x["omega_e_rad_s"], zf)
     udc = np.where(ok, x["udc_v"], zf)
     tref = np.where(ok, x["torque_ref_nm"], zf)
-    sw_prev = np.where(ok, x["sw_prev"], 0).astype(np.intp)
+    prev_sw = np.where(ok, x["prev_sw"], 0).astype(np.intp)
 
     s, c = sincos_f32(th)
     # Clarke (amplitude invariant): i_alpha = i_a, i_beta = (i_a + 2 i_b)/sqrt(3)
@@ -113,7 +113,7 @@ def _step(t: TwoLevelTables, x: np.ndarray) -> np.ndarray:
     ux = np.array(t.ux, F)
     uy = np.array(t.uy, F)
     sw_to_vec = np.array(t.sw_to_vec, np.intp)
-    pv = sw_to_vec[sw_prev]
+    pv = sw_to_vec[prev_sw]
 
     if t.predictor == "flux-geometry":
         psi_a = psi_d * c - psi_q * s
@@ -235,10 +235,10 @@ def _step(t: TwoLevelTables, x: np.ndarray) -> np.ndarray:
 
     zero_sw = np.array(t.zero_sw, np.uint16)
     vec_to_sw = np.array(t.vec_to_sw, np.uint16)
-    sw = np.where(best_v == 0, zero_sw[sw_prev], vec_to_sw[best_v]).astype(np.uint16)
+    sw = np.where(best_v == 0, zero_sw[prev_sw], vec_to_sw[best_v]).astype(np.uint16)
 
-    out["te_nm"] = te
-    out["psi_wb"] = mag
+    out["te_est_nm"] = te
+    out["psi_est_wb"] = mag
     out["psi_alpha_wb"] = psi_a
     out["psi_beta_wb"] = psi_b
     out["sin_theta"] = s

@@ -63,7 +63,7 @@ class Trace:
     Values are taken at the sample instant t_k = k*dt_s, before the period's
     switching state is applied.  Plant quantities are float64; controller
     outputs keep their C types (float32 estimates, uint16 decisions).
-    ``sw`` is the controller's decision at k; ``sw_applied`` the state the
+    ``sw`` is the controller's decision at k; ``applied_sw`` the state the
     inverter holds during [t_k, t_k+1) (equal to ``sw`` without delay
     compensation, the previous decision with it).
     """
@@ -80,7 +80,7 @@ class Trace:
     ib_a: np.ndarray
     theta_e_rad: np.ndarray
     sw: np.ndarray
-    sw_applied: np.ndarray
+    applied_sw: np.ndarray
     vector: np.ndarray
     n_eval: np.ndarray
     fault: np.ndarray
@@ -117,7 +117,7 @@ _DOUBLE_FIELDS = (
     "t_s", "speed_ref_rad_s", "omega_m_rad_s", "te_nm", "torque_ref_nm", "psi_wb",
     "ia_a", "ib_a", "theta_e_rad",
 )
-_U16_FIELDS = ("sw", "sw_applied", "vector", "n_eval", "fault")
+_U16_FIELDS = ("sw", "applied_sw", "vector", "n_eval", "fault")
 _F32_FIELDS = ("te_est_nm", "psi_est_wb")
 #: Trace members: (dtype, values per period), in the order they are allocated.
 _FIELDS = {
@@ -162,7 +162,7 @@ def controller_inputs(trace: Trace, model: Model) -> np.ndarray:
     to the step), for replaying through the Python reference and the
     generated C (numerics.md "Test states" (a)).  Every float field is the
     float64 sample rounded once to float32, as the C cast does;
-    ``sw_prev`` is the previous decision (0 before the first period).
+    ``prev_sw`` is the previous decision (0 before the first period).
     """
     rec = np.zeros(trace.n, dtype=INPUT_DTYPE)
     rec["ia_a"] = trace.ia_a.astype(np.float32)
@@ -171,7 +171,7 @@ def controller_inputs(trace: Trace, model: Model) -> np.ndarray:
     rec["omega_e_rad_s"] = (float(model.motor.pole_pairs) * trace.omega_m_rad_s).astype(np.float32)
     rec["udc_v"] = np.float32(model.inverter.udc_v)
     rec["torque_ref_nm"] = trace.torque_ref_nm.astype(np.float32)
-    sw_prev = np.zeros(trace.n, dtype=np.uint16)
-    sw_prev[1:] = trace.sw[:-1]
-    rec["sw_prev"] = sw_prev
+    prev_sw = np.zeros(trace.n, dtype=np.uint16)
+    prev_sw[1:] = trace.sw[:-1]
+    rec["prev_sw"] = prev_sw
     return rec

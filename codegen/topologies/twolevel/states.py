@@ -37,7 +37,7 @@ def random_states(model: Model, n: int, seed: int = 1) -> np.ndarray:
     x["udc_v"] = rng.uniform(lo - 0.01 * (hi - lo), hi + 0.01 * (hi - lo), n)
     t = 1.01 * g["TORQUE_REF_GUARD_NM"]
     x["torque_ref_nm"] = np.where(rng.random(n) < 0.9, rng.uniform(-t / 4, t / 4, n), rng.uniform(-t, t, n))
-    x["sw_prev"] = np.where(rng.random(n) < 0.002, rng.integers(8, 65536, n), rng.integers(0, 8, n))
+    x["prev_sw"] = np.where(rng.random(n) < 0.002, rng.integers(8, 65536, n), rng.integers(0, 8, n))
     return x
 
 
@@ -66,7 +66,7 @@ def adversarial_states(model: Model, t: TwoLevelTables, reference_step, n_target
         x = random_states(model, n, seed=int(rng.integers(1 << 30)))
         x["theta_e_rad"] = rng.uniform(0, 2 * math.pi, n)
         x["udc_v"] = model.inverter.udc_v
-        x["sw_prev"] = rng.integers(0, 8, n)
+        x["prev_sw"] = rng.integers(0, 8, n)
         return x
 
     # sector borders: flux exactly on (and next to) every 30 deg border
@@ -91,7 +91,7 @@ def adversarial_states(model: Model, t: TwoLevelTables, reference_step, n_target
     # T* exactly at the threshold and one ulp either side (s1-s3 decision border)
     n = n_target // 5
     x = base(n)
-    te = reference_step(t, x)["te_nm"]
+    te = reference_step(t, x)["te_est_nm"]
     eps = t.const("EPS_T_NM")
     sign = np.where(rng.random(n) < 0.5, F(1), F(-1))
     tref = (te + sign * eps).astype(np.float32)
@@ -140,8 +140,8 @@ def adversarial_states(model: Model, t: TwoLevelTables, reference_step, n_target
     # every previous state, including invalid encodings, at speed zero and maximum
     n = n_target - sum(len(p) for p in parts)
     x = base(max(n, 16))
-    x["sw_prev"] = np.arange(len(x)) % 10
-    x["sw_prev"][x["sw_prev"] >= 8] = np.array([8, 65535], np.uint16)[x["sw_prev"][x["sw_prev"] >= 8] - 8]
+    x["prev_sw"] = np.arange(len(x)) % 10
+    x["prev_sw"][x["prev_sw"] >= 8] = np.array([8, 65535], np.uint16)[x["prev_sw"][x["prev_sw"] >= 8] - 8]
     x["omega_e_rad_s"] = np.where(rng.random(len(x)) < 0.5, 0.0, F(g["OMEGA_GUARD_RAD_S"]))
     parts.append(x)
     return np.concatenate(parts)

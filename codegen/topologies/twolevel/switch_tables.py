@@ -54,8 +54,8 @@ def utilisation_counts(model: Model, progress: Callable[[float], None] | None = 
     states = controller_inputs(trace, train)
     out = step_batch(t, states)
     k = _K(t)
-    d_t = states["torque_ref_nm"] - out["te_nm"]
-    d_psi = k.PSI_REF_WB - out["psi_wb"]
+    d_t = states["torque_ref_nm"] - out["te_est_nm"]
+    d_psi = k.PSI_REF_WB - out["psi_est_wb"]
     mask = (np.abs(d_t) > k.EPS_T_NM) & (out["fault"] == 0)
     sec12 = sector12(out["psi_alpha_wb"], out["psi_beta_wb"], k).astype(np.intp)
     vec = out["vector"].astype(np.intp)

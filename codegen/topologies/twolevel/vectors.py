@@ -22,9 +22,9 @@ def sw_to_vec() -> tuple[int, ...]:
     return tuple(table)
 
 
-def zero_state_after(sw_prev: int) -> int:
-    """Zero-vector realisation that changes fewer legs than ``sw_prev`` (tie: 000)."""
-    legs_on = bin(sw_prev).count("1")
+def zero_state_after(prev_sw: int) -> int:
+    """Zero-vector realisation that changes fewer legs than ``prev_sw`` (tie: 000)."""
+    legs_on = bin(prev_sw).count("1")
     return 0b111 if (3 - legs_on) < legs_on else 0b000
 
 

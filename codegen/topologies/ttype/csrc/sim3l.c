@@ -226,11 +226,11 @@ int sim3l_run(const sim3l_params_t *p, const double *speed_ref_rad_s, const doub
         if (tr.n_eval != NULL) tr.n_eval[j] = (unsigned short)out.n_eval;
         if (tr.fault != NULL) tr.fault[j] = (unsigned short)out.fault;
         if (tr.t_n_s != NULL) tr.t_n_s[j] = out.t_n_s;
-        if (tr.te_est_nm != NULL) tr.te_est_nm[j] = out.te_nm;
-        if (tr.psi_est_wb != NULL) tr.psi_est_wb[j] = out.psi_wb;
+        if (tr.te_est_nm != NULL) tr.te_est_nm[j] = out.te_est_nm;
+        if (tr.psi_est_wb != NULL) tr.psi_est_wb[j] = out.psi_est_wb;
         if (tr.psi_ref_wb != NULL) tr.psi_ref_wb[j] = out.psi_ref_wb;
         if (tr.vo_est_v != NULL) tr.vo_est_v[j] = out.vo_v;
-        if (tr.vector_applied != NULL) tr.vector_applied[j] = (unsigned short)state->applied_vector;
+        if (tr.applied_vector != NULL) tr.applied_vector[j] = (unsigned short)state->applied_vector;
         if (tr.leg_changes != NULL) tr.leg_changes[j] = (unsigned short)changes;
         for (i = 0; i < PLANT3L_N_SEG; ++i) {
             if (tr.seg_s != NULL) tr.seg_s[7 * j + i] = state->applied_seg_s[i];

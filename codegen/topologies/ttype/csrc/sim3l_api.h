@@ -109,12 +109,12 @@ typedef struct {
     unsigned short *n_eval;   /* out.n_eval */
     unsigned short *fault;    /* out.fault */
     float *t_n_s;             /* out.t_n_s */
-    float *te_est_nm;         /* out.te_nm */
-    float *psi_est_wb;        /* out.psi_wb */
+    float *te_est_nm;         /* out.te_est_nm */
+    float *psi_est_wb;        /* out.psi_est_wb */
     float *psi_ref_wb;        /* out.psi_ref_wb (controller's flux reference) */
     float *vo_est_v;          /* out.vo_v */
     /* the period actually applied during [t_k, t_k+1) (decision of k-1) */
-    unsigned short *vector_applied;
+    unsigned short *applied_vector;
     unsigned short *leg_changes;  /* one-level leg changes, see above */
     double *uab_v;            /* 7*n: u_ab per segment (V_o at the segment start) */
     double *seg_s;            /* 7*n: applied segment durations, s (0: skipped) */

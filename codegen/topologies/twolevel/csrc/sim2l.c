@@ -55,7 +55,7 @@ int sim2l_init(const sim2l_params_t *p, sim2l_state_t *state)
     state->omega_m_rad_s = 0.0;
     state->theta_e_rad = 0.0;
     state->pi_integral_nm = 0.0;
-    state->sw_prev = 0;
+    state->prev_sw = 0;
     state->k = 0;
     return 0;
 }
@@ -70,7 +70,7 @@ int sim2l_run(const sim2l_params_t *p, const double *speed_ref_rad_s, const doub
     long j;
 
     if (!params_valid(p) || state == NULL || n < 0 || (n > 0 && (speed_ref_rad_s == NULL || load_nm == NULL))
-        || state->sw_prev < 0 || state->sw_prev > 7 || state->k < 0) {
+        || state->prev_sw < 0 || state->prev_sw > 7 || state->k < 0) {
         return -1;
     }
     if (trace != NULL) {
@@ -120,12 +120,12 @@ int sim2l_run(const sim2l_params_t *p, const double *speed_ref_rad_s, const doub
         in.omega_e_rad_s = (float)(pole_pairs * x.omega_m_rad_s);
         in.udc_v = (float)p->udc_v;
         in.torque_ref_nm = (float)t_ref;
-        in.sw_prev = (unsigned short)state->sw_prev;
+        in.prev_sw = (unsigned short)state->prev_sw;
         MPC_STEP(&in, &out);
         sw_dec = (int)out.sw;
 
         /* 6. timing rule (plant-and-metrics.md "Timing") */
-        sw_apply = p->delay_compensation ? state->sw_prev : sw_dec;
+        sw_apply = p->delay_compensation ? state->prev_sw : sw_dec;
 
         /* 5. record the sample instant */
         if (tr.t_s != NULL) tr.t_s[j] = (double)state->k * p->dt_s;
@@ -138,12 +138,12 @@ int sim2l_run(const sim2l_params_t *p, const double *speed_ref_rad_s, const doub
         if (tr.ib_a != NULL) tr.ib_a[j] = ib;
         if (tr.theta_e_rad != NULL) tr.theta_e_rad[j] = th;
         if (tr.sw != NULL) tr.sw[j] = (unsigned short)out.sw;
-        if (tr.sw_applied != NULL) tr.sw_applied[j] = (unsigned short)(sw_apply & 0xFFFF);
+        if (tr.applied_sw != NULL) tr.applied_sw[j] = (unsigned short)(sw_apply & 0xFFFF);
         if (tr.vector != NULL) tr.vector[j] = (unsigned short)out.vector;
         if (tr.n_eval != NULL) tr.n_eval[j] = (unsigned short)out.n_eval;
         if (tr.fault != NULL) tr.fault[j] = (unsigned short)out.fault;
-        if (tr.te_est_nm != NULL) tr.te_est_nm[j] = out.te_nm;
-        if (tr.psi_est_wb != NULL) tr.psi_est_wb[j] = out.psi_wb;
+        if (tr.te_est_nm != NULL) tr.te_est_nm[j] = out.te_est_nm;
+        if (tr.psi_est_wb != NULL) tr.psi_est_wb[j] = out.psi_est_wb;
 
         if (sw_dec < 0 || sw_dec > 7) {
             state->i_d_a = x.i_d_a;
@@ -160,7 +160,7 @@ int sim2l_run(const sim2l_params_t *p, const double *speed_ref_rad_s, const doub
             return -2; /* *state still holds the sample instant of period k */
         }
         /* commit period k */
-        state->sw_prev = sw_dec;
+        state->prev_sw = sw_dec;
         state->pi_integral_nm = integral;
         state->i_d_a = x.i_d_a;
         state->i_q_a = x.i_q_a;

@@ -26,13 +26,13 @@
  *       T*(k) = load_nm[k], read as the torque the drive must deliver
  *       against the load machine (the steady-state equilibrium).
  *  4. Controller input (every field cast to float): ia_a, ib_a, theta_e_rad,
- *     omega_e_rad_s, udc_v, torque_ref_nm, sw_prev = the decision of period
+ *     omega_e_rad_s, udc_v, torque_ref_nm, prev_sw = the decision of period
  *     k-1 (0 = 000 before the first period).  MPC_STEP(&in, &out).
  *  5. Record period k in the trace (sample-instant values).
  *  6. Switching state applied during [t_k, t_k+1):
  *       delay_compensation == 0: out.sw (decision of k acts in the same period)
- *       delay_compensation != 0: sw_prev (decision of k-1; the decision of k
- *       acts during [t_k+1, t_k+2)).  In both cases sw_prev, as given to the
+ *       delay_compensation != 0: prev_sw (decision of k-1; the decision of k
+ *       acts during [t_k+1, t_k+2)).  In both cases prev_sw, as given to the
  *       step, is the state the inverter holds at the sample instant.
  *  7. plant2l_advance over dt_s with `substeps` RK4 sub-steps and the load
  *     torque load_nm[k] (ignored when the speed is imposed).
@@ -68,7 +68,7 @@ typedef struct {
     double omega_m_rad_s;   /* plant: mechanical speed, rad/s */
     double theta_e_rad;     /* plant: electrical angle, rad, in [0, 2*pi) */
     double pi_integral_nm;  /* speed PI integrator, N*m */
-    int sw_prev;            /* decision of the previous period, Sa*4+Sb*2+Sc */
+    int prev_sw;            /* decision of the previous period, Sa*4+Sb*2+Sc */
     long k;                 /* index of the next period (t = k*dt_s) */
 } sim2l_state_t;
 
@@ -88,17 +88,17 @@ typedef struct {
     double *ib_a;             /* plant phase current b */
     double *theta_e_rad;      /* plant electrical angle in [0, 2*pi) */
     unsigned short *sw;       /* controller decision out.sw */
-    unsigned short *sw_applied; /* state applied by the inverter during [t_k, t_k+1) */
+    unsigned short *applied_sw; /* state applied by the inverter during [t_k, t_k+1) */
     unsigned short *vector;   /* out.vector, 0..6 */
     unsigned short *n_eval;   /* out.n_eval (Cal of this step) */
     unsigned short *fault;    /* out.fault bits */
-    float *te_est_nm;         /* out.te_nm (controller estimate) */
-    float *psi_est_wb;        /* out.psi_wb (controller estimate) */
+    float *te_est_nm;         /* out.te_est_nm (controller estimate) */
+    float *psi_est_wb;        /* out.psi_est_wb (controller estimate) */
 } sim2l_trace_t;
 
 /*
  * Validate p and set the initial state: currents 0, speed 0, angle 0, PI
- * integrator 0, sw_prev 0 (000), k 0.  The caller may change the state's
+ * integrator 0, prev_sw 0 (000), k 0.  The caller may change the state's
  * fields afterwards (e.g. an initial speed).  Returns 0, or -1 if p is
  * invalid (non-positive inductance, dt_s or Udc, J <= 0 without imposed
  * speed, substeps < 1, pole_pairs < 1, limit_nm < 0, non-finite values).
