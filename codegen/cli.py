@@ -8,9 +8,8 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-import time
+from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Callable, Sequence
 
 from codegen import __version__
 from codegen.errors import ConfigError, MpcgenError, UsageError

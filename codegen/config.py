@@ -30,9 +30,9 @@ from codegen.errors import FILE_FIELD, MISSING, ConfigError, Marker
 from codegen.model import (
     NUMBER_FORMATS,
     PREDICTORS,
+    STRATEGIES_BY_TOPOLOGY,
     TABLE_SOURCES,
     TARGETS,
-    STRATEGIES_BY_TOPOLOGY,
     Controller,
     Derivation,
     Inverter,

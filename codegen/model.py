@@ -119,11 +119,11 @@ class Model:
     scenario: Scenario
     target: Target = "host"
 
-    def replace(self, **sections: object) -> "Model":
+    def replace(self, **sections: object) -> Model:
         """Return a copy with whole sections or top-level fields replaced."""
         return dataclasses.replace(self, **sections)  # type: ignore[arg-type]
 
-    def with_controller(self, **fields: object) -> "Model":
+    def with_controller(self, **fields: object) -> Model:
         """Return a copy with some controller fields replaced."""
         return dataclasses.replace(
             self, controller=dataclasses.replace(self.controller, **fields)  # type: ignore[arg-type]

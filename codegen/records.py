@@ -51,7 +51,7 @@ class Record:
     name: str
     fields: tuple[Field, ...]
 
-    def bind(self, nf: NumberFormat) -> "RecordLayout":
+    def bind(self, nf: NumberFormat) -> RecordLayout:
         """This record's layouts in number format ``nf``."""
         return RecordLayout(self, nf)
 

@@ -6,6 +6,7 @@ import json
 import pytest
 
 from codegen.cli import main
+
 from conftest import SPMSM, TWO_LEVEL, require_tool
 
 

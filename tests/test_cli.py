@@ -7,6 +7,7 @@ import sys
 import pytest
 
 from codegen.cli import main
+
 from conftest import ROOT, SPMSM
 
 SUBCOMMANDS = ("generate", "verify", "simulate", "tables", "bench", "firmware")

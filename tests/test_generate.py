@@ -7,6 +7,7 @@ import subprocess
 import pytest
 
 from codegen.cli import main
+
 from conftest import IPMSM, SPMSM, TWO_LEVEL, require_tool
 
 WARN = ["-std=c99", "-Wall", "-Wextra", "-Wconversion", "-Wdouble-promotion", "-Werror"]

@@ -6,6 +6,7 @@ import json
 import pytest
 
 from codegen.cli import main
+
 from conftest import IPMSM, SPMSM, TWO_LEVEL
 
 KEYS = ("T_rip_RMSE", "psi_rip_RMSE", "THD_ia", "f_ave_hz", "Cal_ave", "wall_s")

@@ -4,6 +4,7 @@ from __future__ import annotations
 import re
 
 from codegen.cli import main
+
 from conftest import SPMSM
 
 

@@ -7,6 +7,7 @@ import subprocess
 import pytest
 
 from codegen.cli import main
+
 from conftest import EXAMPLES, require_tool
 
 TLEVEL = EXAMPLES / "seed000_tlevel.toml"
@@ -34,7 +35,7 @@ def test_verify_both_strategies(tmp_path, n):
     assert main(["verify", str(TLEVEL), "--states", str(n), "--json", str(js), "-q"]) == 0
     data = json.loads(js.read_text())
     assert set(data["strategies"]) == {"mpdtc27", "mpdtc63"}
-    for s, r in data["strategies"].items():
+    for _s, r in data["strategies"].items():
         assert r["states"] >= n and r["mismatches"] == 0, r["first_mismatch"]
         assert r["sources"]["closed_loop"] > 0
 

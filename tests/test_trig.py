@@ -1,8 +1,8 @@
 """The generated sin/cos: accuracy (a property) and determinism of the constants."""
 import numpy as np
 
-from codegen.numfmt.float32 import c_float_literal, f32
 from codegen.kernels.trig import ANGLE_GUARD_RAD, sincos_coeffs, sincos_f32
+from codegen.numfmt.float32 import c_float_literal, f32
 
 
 def test_accuracy_over_guard_range():

@@ -9,10 +9,11 @@ import pytest
 import codegen.topologies.twolevel.hostbuild as hostbuild
 from codegen.cli import main
 from codegen.compare import mismatch_mask
+from codegen.stages.verify import verify_strategy
 from codegen.topologies.twolevel import reference
 from codegen.topologies.twolevel.states import adversarial_states, random_states
 from codegen.topologies.twolevel.switch_tables import tables_for
-from codegen.stages.verify import verify_strategy
+
 from conftest import IPMSM, SPMSM, TWO_LEVEL, model_for
 
 

@@ -14,8 +14,8 @@ Emulated (``--emulated``): instructions per step on the emulated Cortex-M7
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 

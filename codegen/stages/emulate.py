@@ -25,10 +25,10 @@ from typing import Any
 import numpy as np
 
 from codegen.errors import MpcgenError
+from codegen.model import Model
 from codegen.stages.firmware import QEMU, build_firmware, make_test_sets, require_tools, write_firmware_project
 from codegen.stages.fwdata import layouts
 from codegen.topology import topology_of
-from codegen.model import Model
 
 #: Default -icount shift: 25.6 SysTick ticks per instruction.
 ICOUNT_SHIFT = 10

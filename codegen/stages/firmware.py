@@ -26,12 +26,12 @@ import numpy as np
 
 from codegen import __version__
 from codegen.errors import MpcgenError
-from codegen.records import REAL, RecordLayout
-from codegen.stages.fwdata import SELFTEST_SEED, expected_outputs, layouts, trajectory_states
-from codegen.topology import topology_of
 from codegen.model import Model
+from codegen.records import REAL, RecordLayout
 from codegen.render import environment
 from codegen.resources import firmware_dir
+from codegen.stages.fwdata import SELFTEST_SEED, expected_outputs, layouts, trajectory_states
+from codegen.topology import topology_of
 
 RUNTIME_FILES = ("main.c", "console.c", "console.h", "mpc_runtime.c", "mpc_runtime.h",
                  "selftest.c", "selftest.h", "port.h")

@@ -6,8 +6,8 @@ same config gives the same bytes.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 from codegen.model import Model
 from codegen.render import write_files

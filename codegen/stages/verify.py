@@ -10,8 +10,8 @@ Topology-agnostic: everything topology-specific comes from the plugin.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
-from typing import Callable
 
 import numpy as np
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import os
 import shutil
-from functools import lru_cache
+from functools import cache
 from pathlib import Path
 from typing import Any
 
@@ -32,7 +32,7 @@ CASES = [("spmsm", s) for s in ("conventional", "s1", "s2", "s3")] + [("tlevel",
 CASE_IDS = [f"{c}-{s}" for c, s in CASES]
 
 
-@lru_cache(maxsize=None)
+@cache
 def example(config: str, strategy: str) -> tuple[Model, Any]:
     """An example config with ``strategy`` and its derived tables (two-level: published switch tables)."""
     overrides: dict[str, object] = {"controller.strategy": strategy}

@@ -15,8 +15,8 @@ from pathlib import Path
 
 import pytest
 
-from codegen.stages import firmware as firmware
 from codegen.hostbuild import STRICT_CFLAGS
+from codegen.stages import firmware as firmware
 
 from fw_support import example
 

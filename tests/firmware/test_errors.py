@@ -3,9 +3,9 @@ from __future__ import annotations
 
 import pytest
 
+from codegen.errors import MpcgenError
 from codegen.stages import emulate
 from codegen.stages import firmware as firmware
-from codegen.errors import MpcgenError
 
 from fw_support import example
 

@@ -10,8 +10,8 @@ import pytest
 
 from codegen.metrics import steady_windows, window_slice
 from codegen.simulator.driver import SimulationError, default_substeps, n_periods, scenario_arrays
-from codegen.topologies.twolevel.sim import Trace, controller_inputs, params_from_model, run_closed_loop
 from codegen.topologies.twolevel.records import INPUT_DTYPE
+from codegen.topologies.twolevel.sim import Trace, controller_inputs, params_from_model, run_closed_loop
 
 RPM = 2 * math.pi / 60
 

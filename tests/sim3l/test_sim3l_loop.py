@@ -8,8 +8,8 @@ import cffi
 import numpy as np
 import pytest
 
+from codegen.simulator.driver import SimulationError
 from codegen.topologies.ttype.metrics import leg_level_changes
-from codegen.topologies.twolevel.sim import SimulationError
 from codegen.topologies.ttype.sim import (
     INPUT3_DTYPE,
     RUNTIME,

@@ -11,16 +11,17 @@ import numpy as np
 import pytest
 
 from codegen.config import load_config
+from codegen.stages.verify import verify_strategy
+from codegen.topologies.ttype import reference
 from codegen.topologies.ttype import transitions as tr
 from codegen.topologies.ttype import vectors as v
 from codegen.topologies.ttype import virtual as vv
 from codegen.topologies.ttype.derive import derive_three_level, t_n_min
 from codegen.topologies.ttype.hostbuild import build_three_level_library
 from codegen.topologies.ttype.records import FAULT, INPUT_DTYPE, SAFE_STATE
-from codegen.topologies.ttype import reference
 from codegen.topologies.ttype.render import render_three_level
 from codegen.topologies.ttype.states import adversarial_states, random_states
-from codegen.stages.verify import verify_strategy
+
 from conftest import EXAMPLES, require_tool
 
 TLEVEL = EXAMPLES / "seed000_tlevel.toml"

@@ -21,14 +21,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from codegen.numfmt.float32 import f32
-from codegen.model import Model
-from codegen.units import GUARD_UNITS
 from codegen.kernels.trig import ANGLE_GUARD_RAD, sincos_constants
-from codegen.topologies.twolevel.derive import Const
+from codegen.model import Model
+from codegen.numfmt.float32 import f32
 from codegen.topologies.ttype import candidates as cd
 from codegen.topologies.ttype import vectors as v
 from codegen.topologies.ttype import virtual as vv
+from codegen.topologies.twolevel.derive import Const
+from codegen.units import GUARD_UNITS
 
 
 @dataclass(frozen=True)

@@ -119,7 +119,7 @@ def resample_piecewise(values: Any, durations: Any, dt_grid: float, n_samples: i
 
 
 def uab_thd(
-    trace: "Trace3",
+    trace: Trace3,
     t0: float,
     t1: float,
     f1_hz: float,
@@ -206,7 +206,7 @@ def leg_level_changes(seg_states: Any, seg_s: Any, initial_state: int = _OOO) ->
 # all three-level metrics of one run
 # ---------------------------------------------------------------------------
 def three_level_metrics(
-    trace: "Trace3",
+    trace: Trace3,
     model: Model,
     stats_window: tuple[float, float] | None = None,
     window_s: float = 0.2,

@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
+
 from codegen.metrics import thd_window, window_slice
 from codegen.model import Model
 from codegen.plotting import new_figure, save_figure
@@ -20,7 +21,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
 __all__ = ["plot_three_level", "uab_steps"]
 
-def uab_steps(trace: "Trace3", sl: slice) -> tuple[np.ndarray, np.ndarray]:
+def uab_steps(trace: Trace3, sl: slice) -> tuple[np.ndarray, np.ndarray]:
     """(t, u_ab) step-plot points of the applied segments of periods sl (zero-length dropped)."""
     dt = trace.dt_s
     k = np.arange(sl.start, sl.stop)
@@ -35,7 +36,7 @@ def uab_steps(trace: "Trace3", sl: slice) -> tuple[np.ndarray, np.ndarray]:
     return t, v
 
 
-def plot_three_level(trace: "Trace3", model: Model, strategy: str, speed_rpm: float,
+def plot_three_level(trace: Trace3, model: Model, strategy: str, speed_rpm: float,
                      outdir: str | Path) -> list[Path]:
     """Write ``<strategy>_<speed>rpm_{torque,flux,currents,vo,uab}.png`` into outdir.
 

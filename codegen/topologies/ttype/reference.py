@@ -45,9 +45,9 @@ from __future__ import annotations
 import numpy as np
 
 from codegen.kernels.trig import sincos_f32
-from codegen.topologies.twolevel.reference import sector12
 from codegen.topologies.ttype.derive import ThreeLevelTables
 from codegen.topologies.ttype.records import FAULT, INPUT_DTYPE, N_MAX_EVAL, N_SEGMENTS, OUTPUT_DTYPE, SAFE_STATE
+from codegen.topologies.twolevel.reference import sector12
 
 F = np.float32
 FIRST_VIRTUAL = 27

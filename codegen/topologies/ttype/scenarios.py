@@ -11,14 +11,14 @@ from __future__ import annotations
 
 import dataclasses
 import time
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
-from codegen.topologies.ttype.metrics import three_level_metrics
 from codegen.model import Model
 from codegen.results import clean_json as _clean
 from codegen.results import fmt_cell as _fmt
 from codegen.results import versions
+from codegen.topologies.ttype.metrics import three_level_metrics
 
 STEADY_SPEEDS_RPM = (300.0, 1800.0, 3000.0)
 KEYS = ("T_rip_RMSE", "psi_rip_RMSE", "THD_ia", "Vo_std", "THD_uab", "max_line_jump_udc2", "f_ave_hz", "Cal_ave")
@@ -41,9 +41,9 @@ def load_step_model(model: Model) -> Model:
 
 
 def _run(model: Model, log: Callable[[str], None], label: str, initial_speed_rpm: float = 0.0):
-    from codegen.topologies.ttype.sim import run_closed_loop3
     from codegen.topologies.ttype.derive import derive_three_level
     from codegen.topologies.ttype.hostbuild import build_three_level_library
+    from codegen.topologies.ttype.sim import run_closed_loop3
 
     lib = build_three_level_library(model, derive_three_level(model), with_sim=True)
     t0 = time.perf_counter()

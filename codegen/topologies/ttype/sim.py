@@ -18,10 +18,10 @@ firmware/runtime/sim3l_api.h.  Plant model and the V_o sign convention
 from __future__ import annotations
 
 import math
-
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 
@@ -32,12 +32,10 @@ from codegen.simulator.driver import (
     RPM_TO_RAD_S,
     SHARED_HEADERS,
     SHARED_SOURCES,
-    SimulationError,
     fill_common_params,
     run_chunked,
 )
 from codegen.topologies.ttype.records import INPUT_DTYPE as INPUT3_DTYPE
-
 
 #: Segments per control period.
 N_SEG = 7

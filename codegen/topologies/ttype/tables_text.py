@@ -21,7 +21,6 @@ from codegen.topologies.ttype import published as pub
 from codegen.topologies.ttype import vectors as v
 from codegen.topologies.ttype import virtual as vv
 
-
 # --- Table 2 ----------------------------------------------------------------
 
 @dataclass(frozen=True)

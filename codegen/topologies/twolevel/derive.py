@@ -12,11 +12,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from codegen.numfmt.float32 import f32
-from codegen.model import Model
-from codegen.units import GUARD_UNITS
 from codegen.kernels.trig import ANGLE_GUARD_RAD, sincos_constants
+from codegen.model import Model
+from codegen.numfmt.float32 import f32
 from codegen.topologies.twolevel import vectors
+from codegen.units import GUARD_UNITS
 
 #: A switch table: [condition][sector] -> candidate vectors (V0 first).
 SwitchTable = tuple[tuple[tuple[int, ...], ...], ...]

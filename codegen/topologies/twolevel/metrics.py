@@ -26,7 +26,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
 
 def two_level_metrics(
-    trace: "Trace",
+    trace: Trace,
     model: Model,
     stats_window: tuple[float, float] | None = None,
     window_s: float = 0.2,

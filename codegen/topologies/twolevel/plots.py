@@ -7,11 +7,9 @@ reference, flux magnitude, phase currents, spectrum of i_a).
 """
 from __future__ import annotations
 
-import math
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-import numpy as np
 from codegen.metrics import amplitude_spectrum, fundamental_hz, thd, thd_window, window_slice
 from codegen.model import Model
 from codegen.plotting import new_figure, save_figure
@@ -21,7 +19,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
 __all__ = ["plot_two_level"]
 
-def plot_two_level(trace: "Trace", model: Model, strategy: str, outdir: str | Path) -> list[Path]:
+def plot_two_level(trace: Trace, model: Model, strategy: str, outdir: str | Path) -> list[Path]:
     """Write ``<strategy>_{speed,torque,flux,currents,spectrum}.png`` into outdir.
 
     Returns the paths written.  The spectrum uses the THD window of

@@ -9,8 +9,8 @@ reproduces the Table 1/2 experiment (strategy s1 at several eps_T).
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 

@@ -15,9 +15,10 @@ scenarios").  Timing and PI details: firmware/runtime/sim2l_api.h.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 
@@ -27,7 +28,6 @@ from codegen.simulator.driver import (
     RPM_TO_RAD_S,
     SHARED_HEADERS,
     SHARED_SOURCES,
-    SimulationError,
     default_substeps,
     fill_common_params,
     run_chunked,

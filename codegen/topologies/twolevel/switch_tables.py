@@ -17,8 +17,8 @@ IPMSM run is an example) and takes the published-derived cell instead; the
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 
@@ -26,7 +26,6 @@ from codegen.model import Model
 from codegen.topologies.twolevel.derive import SwitchTable, TwoLevelTables, derive_two_level
 from codegen.topologies.twolevel.reference import _K, sector12, step_batch
 from codegen.topologies.twolevel.utilisation import count_utilisation, derive_table, published_tables
-
 
 #: Fewest active-vector choices in a cell for its derived set to be used.
 MIN_CELL_SAMPLES = 100
