@@ -134,6 +134,13 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 # ---------------------------------------------------------------- tables
 def cmd_tables(args: argparse.Namespace) -> int:
     model = _load(args)
+    if args.derive:
+        if not args.output:
+            raise UsageError("--derive needs -o FILE: the file the trained switch tables are written to")
+        print(topology_of(model).export_tables(model, Path(args.output), log=_log(args.quiet)))
+        return EXIT_OK
+    if args.output:
+        raise UsageError("-o FILE goes with --derive (write the trained switch tables)")
     print(topology_of(model).tables_text(model, args.utilisation, log=_log(args.quiet)))
     return EXIT_OK
 
@@ -207,6 +214,10 @@ def build_parser() -> argparse.ArgumentParser:
     _add_config_args(t)
     t.add_argument("--utilisation", choices=("published", "training"), default="training",
                    help="derive from the seed's published utilisation tables or from a training run (default)")
+    t.add_argument("--derive", action="store_true",
+                   help="run the training and write the s2/s3 tables with their provenance to -o FILE "
+                        "(name that file in the config as controller.tables_file)")
+    t.add_argument("-o", "--output", help="with --derive: the tables file to write (JSON)")
     t.set_defaults(func=cmd_tables)
 
     b = sub.add_parser("bench", help="execution cost per step, all strategies side by side")

@@ -24,7 +24,7 @@ import tomllib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import NoReturn, get_args
+from typing import Any, NoReturn, get_args
 
 from codegen.errors import FILE_FIELD, MISSING, ConfigError, Marker
 from codegen.model import (
@@ -148,6 +148,7 @@ TEXT = "text"      # non-empty string
 CHOICE = "choice"  # string, one of ``choices``
 PREFIX = "prefix"  # C identifier prefix
 STEPS = "steps"    # [[time_s, value], ...] with values in ``interval``
+PATH = "path"      # optional file path, relative to the config file's folder; must exist
 
 
 @dataclass(frozen=True)
@@ -182,8 +183,8 @@ def _oo(lo: Bound, hi: Bound) -> Interval:
     return Interval(lo, hi, lo_open=True, hi_open=True)
 
 
-def _real(interval: Interval, **hints: str) -> Spec:
-    return Spec(REAL, interval, **hints)
+def _real(interval: Interval, hint_low: str = "", hint_high: str = "") -> Spec:
+    return Spec(REAL, interval, hint_low=hint_low, hint_high=hint_high)
 
 
 def _choice(choices: tuple[str, ...], hint: str = "") -> Spec:
@@ -222,6 +223,7 @@ SCHEMA: dict[str, Spec] = {
     "controller.predictor": _choice(PREDICTORS),
     "controller.delay_compensation": Spec(BOOL),
     "controller.tables": _choice(TABLE_SOURCES),
+    "controller.tables_file": Spec(PATH),
     "controller.dt_s": _real(_cc(1e-6, 1e-3)),
     "controller.psi_ref_wb": _real(_oc(0, 10)),
     "controller.eps_t_nm": _real(_co(0, Ref("motor.rated_torque_nm"))),
@@ -375,6 +377,24 @@ def _check_text(ck: _Checker, path: str, value: object, spec: Spec) -> str:
     return value
 
 
+def _check_path(ck: _Checker, path: str, value: object, spec: Spec) -> str | None:
+    if value is None:
+        return None
+    if not isinstance(value, str) or not value.strip():
+        ck.fail(path, value, "must be a non-empty file path (relative to the config file's folder)")
+    where = resolve_path(ck.file, value)
+    if not where.is_file():
+        ck.fail(path, value, f"file not found: {where} (a path is relative to the config file's folder; "
+                "write the file with `mpcgen tables CONFIG --derive -o FILE`)")
+    return value
+
+
+def resolve_path(config_file: str, value: str) -> Path:
+    """A path from a config field: absolute, or relative to the config file's folder."""
+    p = Path(value)
+    return p if p.is_absolute() else Path(config_file).parent / p
+
+
 def _check_choice(ck: _Checker, path: str, value: object, spec: Spec) -> str:
     options = ", ".join(spec.choices)
     allowed = f"{spec.hint}, allowed: {options}" if spec.hint else f"must be one of {options}"
@@ -428,6 +448,7 @@ _CHECKS: dict[str, Callable[[_Checker, str, object, Spec], object]] = {
     CHOICE: _check_choice,
     PREFIX: _check_prefix,
     STEPS: _check_steps,
+    PATH: _check_path,
 }
 
 
@@ -473,8 +494,20 @@ def _check_three_level_motor(ck: _Checker) -> None:
         )
 
 
+def _check_tables_file(ck: _Checker) -> None:
+    v = ck.values
+    if v["controller.tables_file"] is None:
+        return
+    if v["inverter.topology"] != "two-level" or v["controller.tables"] != "derived":
+        ck.fail("controller.tables_file", v["controller.tables_file"],
+                "names the switch tables derived by a training run, which only a two-level config with "
+                f"controller.tables = 'derived' uses (inverter.topology = '{v['inverter.topology']}', "
+                f"controller.tables = '{v['controller.tables']}')")
+
+
 _CONSISTENCY: tuple[Callable[[_Checker], None], ...] = (
     _check_topology,
+    _check_tables_file,
     _check_three_level_motor,
     _check_predictor_geometry,
 )
@@ -583,7 +616,7 @@ def _collect(ck: _Checker, data: dict) -> dict[str, object]:
 def _build(values: Mapping[str, object], source: str) -> Model:
     """Assemble the frozen Model from checked values."""
 
-    def kw(section: str) -> dict[str, object]:
+    def kw(section: str) -> dict[str, Any]:
         return {_attr_of(p): values[p] for p in SCHEMA if _section_of(p) == section}
 
     return Model(
@@ -595,7 +628,7 @@ def _build(values: Mapping[str, object], source: str) -> Model:
         controller=Controller(**kw("controller"), derivation=Derivation(**kw("controller.derivation"))),
         speed_loop=SpeedLoop(**kw("speed_loop")),
         scenario=Scenario(**kw("scenario")),
-    )  # type: ignore[arg-type]
+    )
 
 
 # --------------------------------------------------------------------------

@@ -79,6 +79,8 @@ class Controller:
     psi_ref_wb: float
     eps_t_nm: float
     number_format: str = "float32"
+    #: s2/s3 switch tables written by ``mpcgen tables --derive`` (relative to the config's folder)
+    tables_file: str | None = None
     derivation: Derivation = field(default_factory=Derivation)
     # three-level MPDTC only (mpdtc-three-level.md, eq. (7) and (10)-(11))
     lambda_psi_nm_per_wb: float = 28.0

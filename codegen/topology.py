@@ -110,6 +110,11 @@ class Topology(Protocol):
         """The derived switch tables and vector sets as text (``mpcgen tables``)."""
         ...
 
+    def export_tables(self, model: Model, path: Path, log: Log) -> str:
+        """Run the training and write the trained tables with their provenance (``tables --derive``),
+        or Unsupported; returns a one-paragraph summary."""
+        ...
+
 
 #: ``inverter.topology`` value -> module exporting ``PLUGIN``
 TOPOLOGIES: dict[str, str] = {

@@ -88,5 +88,9 @@ class TType:
     def tables_text(self, model: Model, source: str, log: Log) -> str:
         return tables_text.tables_report()
 
+    def export_tables(self, model: Model, path: Path, log: Log) -> str:
+        raise Unsupported("--derive: t-type candidate tables are derived by search when generating and need "
+                          f"no training run; {model.source} has nothing to export (see `mpcgen tables` for them)")
+
 
 PLUGIN = TType()

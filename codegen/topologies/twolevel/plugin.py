@@ -17,7 +17,16 @@ import numpy as np
 
 from codegen.hostbuild import HostLib
 from codegen.model import STRATEGIES_BY_TOPOLOGY, Model
-from codegen.topologies.twolevel import fwstates, reference, report, scenarios, sim, states, tables_text
+from codegen.topologies.twolevel import (
+    fwstates,
+    reference,
+    report,
+    scenarios,
+    sim,
+    states,
+    switch_tables,
+    tables_text,
+)
 from codegen.topologies.twolevel.hostbuild import build_host_library
 from codegen.topologies.twolevel.records import INPUT, OUTPUT
 from codegen.topologies.twolevel.render import render_two_level
@@ -79,6 +88,15 @@ class TwoLevel:
 
     def tables_text(self, model: Model, source: str, log: Log) -> str:
         return tables_text.two_level_tables_text(model, source, log)
+
+    def export_tables(self, model: Model, path: Path, log: Log) -> str:
+        log(f"training run: conventional controller over the {model.scenario.duration_s:g} s scenario of {model.name}")
+        data = switch_tables.export_tables(model, path, progress=lambda f: log(f"  training {f:5.0%}"))
+        thin = {k: len(v) for k, v in data["thin_cells"].items()}
+        return (f"wrote {path}: s2 and s3 switch tables from {data['training']['samples_outside_eps']} training "
+                f"samples outside eps_T (training config {data['training']['training_config_hash']}; cells with "
+                f"< {data['derivation']['min_cell_samples']} samples taking the published-derived set: "
+                f"s2 {thin['s2']}, s3 {thin['s3']}); name it in the config as controller.tables_file")
 
 
 PLUGIN = TwoLevel()

@@ -22,7 +22,9 @@ from pathlib import Path
 
 import numpy as np
 
+from codegen.errors import ConfigError
 from codegen.model import Model
+from codegen.topologies.twolevel import tables_file
 from codegen.topologies.twolevel.derive import SwitchTable, TwoLevelTables, derive_two_level
 from codegen.topologies.twolevel.reference import _K, sector12, step_batch
 from codegen.topologies.twolevel.utilisation import count_utilisation, derive_table, published_tables
@@ -37,8 +39,9 @@ def thin_cells(counts: np.ndarray) -> np.ndarray:
 
 
 def training_model(model: Model) -> Model:
-    """The conventional variant whose closed-loop run is the training data."""
-    return model.with_controller(strategy="conventional", tables="published")
+    """The conventional variant whose closed-loop run is the training data (host target, no tables file)."""
+    return model.with_controller(strategy="conventional", tables="published", tables_file=None).replace(
+        target="host")
 
 
 def utilisation_counts(model: Model, progress: Callable[[float], None] | None = None) -> dict[str, np.ndarray]:
@@ -73,9 +76,11 @@ def _cache_file(model: Model) -> Path:
 
 
 def derived_tables(model: Model, progress: Callable[[float], None] | None = None) -> tuple[SwitchTable, SwitchTable, dict[str, np.ndarray]]:
-    """(s2 table, s3 table, counts) derived from the training run (cached)."""
+    """(s2 table, s3 table, counts): from the config's tables file, else from the training run (cached)."""
     cache = _cache_file(model)
-    if cache.exists():
+    if model.controller.tables_file is not None:
+        counts, stored = tables_file.read_counts(model, training_model(model))
+    elif cache.exists():
         raw = json.loads(cache.read_text())
         counts = {k: np.array(v, dtype=np.int64) for k, v in raw.items()}
     else:
@@ -87,7 +92,21 @@ def derived_tables(model: Model, progress: Callable[[float], None] | None = None
     trusted = {k: np.where(thin_cells(v)[..., None], 0, v) for k, v in counts.items()}
     s2 = derive_table(trusted["s2"], d.coverage, d.max_active, fallback=pub2)
     s3 = derive_table(trusted["s3"], d.coverage, d.max_active, fallback=pub3)
+    if model.controller.tables_file is not None:
+        mine = {"s2": [[list(c) for c in r] for r in s2], "s3": [[list(c) for c in r] for r in s3]}
+        if stored != mine:
+            raise ConfigError(model.source, tables_file.FIELD, model.controller.tables_file,
+                              "its tables do not follow from its counts (edited by hand?); "
+                              "re-run `mpcgen tables CONFIG --derive -o FILE`")
     return s2, s3, counts
+
+
+def export_tables(model: Model, path: Path, progress: Callable[[float], None] | None = None) -> dict:
+    """Run (or reuse) the training and write the tables artefact to ``path``."""
+    train = training_model(model)
+    s2, s3, counts = derived_tables(model.with_controller(tables="derived", tables_file=None), progress)
+    thin = {k: thin_cells(v) for k, v in counts.items()}
+    return tables_file.write_tables_file(path, train, counts, {"s2": s2, "s3": s3}, thin, MIN_CELL_SAMPLES)
 
 
 def switch_table_for(model: Model, progress: Callable[[float], None] | None = None) -> SwitchTable | None:
