@@ -6,6 +6,10 @@ Python reference and the compiled C and demands equal bits.
 
     .venv/bin/python tests/golden/record.py
 
+The files in the repository were recorded before the architecture change
+(with the record field names of then: ``sw_prev``, ``te_nm``, ``psi_wb``;
+``tests/test_golden.py`` maps them); re-recording writes today's names.
+
 Writes ``controller_<config>.npz`` (per strategy: input and output record
 fields, keys ``<strategy>/in/<field>`` and ``<strategy>/out/<field>``) and
 ``simulate_<config>.json`` (the ``mpcgen simulate`` JSON without wall times).
@@ -41,44 +45,21 @@ def _spaced(x: np.ndarray, n: int) -> np.ndarray:
 
 def record_controller(name: str) -> None:
     from codegen.config import load_config
+    from codegen.topology import topology_of
 
     base = load_config(ROOT / "examples" / f"{name}.toml")
+    topo = topology_of(base)
     arrays: dict[str, np.ndarray] = {}
-    if base.inverter.topology == "t-type":
-        from codegen.topologies.ttype import reference
-        from codegen.topologies.ttype.derive import derive_three_level
-        from codegen.topologies.ttype.hostbuild import build_three_level_library
-        from codegen.topologies.ttype.states import adversarial_states, random_states
-        from codegen.topologies.ttype.verify import closed_loop_states
-
-        strategies = ("mpdtc27", "mpdtc63")
-        for s in strategies:
-            m = base.with_controller(strategy=s)
-            t = derive_three_level(m)
-            lib = build_three_level_library(m, t, with_sim=True)
-            x = np.concatenate([_spaced(closed_loop_states(m, lib), N_CLOSED),
-                                adversarial_states(m, t, n_target=N_ADV)[:N_ADV],
-                                random_states(m, N_RANDOM, seed=5)])
-            ref, got = reference.step_batch(t, x), lib.step_batch(x)
-            assert ref.tobytes() == got.tobytes(), f"{name}/{s}: C and reference differ"
-            _store(arrays, s, x, ref)
-    else:
-        from codegen.hostbuild import build_host_library
-        from codegen.topologies.twolevel import reference
-        from codegen.topologies.twolevel.states import adversarial_states, random_states
-        from codegen.topologies.twolevel.switch_tables import tables_for
-        from codegen.stages.verify import closed_loop_states
-
-        for s in ("conventional", "s1", "s2", "s3"):
-            m = base.with_controller(strategy=s)
-            t = tables_for(m)
-            lib = build_host_library(m, t, with_sim=True)
-            x = np.concatenate([_spaced(closed_loop_states(m, lib), N_CLOSED),
-                                adversarial_states(m, t, reference.step_batch, n_target=N_ADV)[:N_ADV],
-                                random_states(m, N_RANDOM, seed=5)])
-            ref, got = reference.step_batch(t, x), lib.step_batch(x)
-            assert ref.tobytes() == got.tobytes(), f"{name}/{s}: C and reference differ"
-            _store(arrays, s, x, ref)
+    for s in topo.strategies:
+        m = base.with_controller(strategy=s)
+        t = topo.derive(m)
+        lib = topo.host_library(m, t, with_sim=True)
+        x = np.concatenate([_spaced(topo.closed_loop_states(m, lib), N_CLOSED),
+                            topo.adversarial_states(m, t, N_ADV)[:N_ADV],
+                            topo.random_states(m, N_RANDOM, 5)])
+        ref, got = topo.step_batch(t, x), lib.step_batch(x)
+        assert ref.tobytes() == got.tobytes(), f"{name}/{s}: C and reference differ"
+        _store(arrays, s, x, ref)
     np.savez_compressed(HERE / f"controller_{name}.npz", **arrays)
 
 
