@@ -106,8 +106,9 @@ class Topology(Protocol):
         """Torque-threshold sweep (``simulate --sweep-eps``), or Unsupported."""
         ...
 
-    def tables_text(self, model: Model, source: str, log: Log) -> str:
-        """The derived switch tables and vector sets as text (``mpcgen tables``)."""
+    def tables_text(self, model: Model, source: str | None, log: Log) -> str:
+        """The derived switch tables and vector sets as text (``mpcgen tables``); ``source`` is the
+        ``--utilisation`` option (None: the topology's default)."""
         ...
 
     def export_tables(self, model: Model, path: Path, log: Log) -> str:

@@ -169,7 +169,7 @@ def parse_console(text: str) -> ConsoleReport:
     return ConsoleReport(hello, cal, sets, result, exit_code, errors)
 
 
-def ticks_to_instructions(ticks: np.ndarray | int, icount_shift: int = ICOUNT_SHIFT) -> np.ndarray:
+def ticks_to_instructions(ticks: np.ndarray | list[int] | int, icount_shift: int = ICOUNT_SHIFT) -> np.ndarray:
     """SysTick ticks under -icount shift=N -> instructions (ticks * 40 / 2**N)."""
     return np.asarray(ticks, dtype=np.float64) * (1e9 / SYSTICK_HZ) / float(2 ** icount_shift)
 

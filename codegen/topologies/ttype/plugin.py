@@ -85,7 +85,10 @@ class TType:
                           f"{model.source} is a t-type config (strategies {', '.join(self.strategies)}), "
                           "whose MPDTC has no torque threshold")
 
-    def tables_text(self, model: Model, source: str, log: Log) -> str:
+    def tables_text(self, model: Model, source: str | None, log: Log) -> str:
+        if source is not None:
+            raise Unsupported(f"--utilisation {source}: utilisation-derived switch tables belong to the two-level "
+                              f"strategies s2/s3; {model.source} is a t-type config")
         return tables_text.tables_report()
 
     def export_tables(self, model: Model, path: Path, log: Log) -> str:

@@ -86,8 +86,8 @@ class TwoLevel:
     def sweep_eps(self, model: Model, eps_list: list[float], log: Log) -> dict:
         return scenarios.run_threshold_sweep(model, eps_list, log=log)
 
-    def tables_text(self, model: Model, source: str, log: Log) -> str:
-        return tables_text.two_level_tables_text(model, source, log)
+    def tables_text(self, model: Model, source: str | None, log: Log) -> str:
+        return tables_text.two_level_tables_text(model, source or "training", log)
 
     def export_tables(self, model: Model, path: Path, log: Log) -> str:
         log(f"training run: conventional controller over the {model.scenario.duration_s:g} s scenario of {model.name}")
