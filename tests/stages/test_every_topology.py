@@ -12,6 +12,7 @@ import pytest
 
 from codegen.cli import main
 from codegen.topology import TOPOLOGIES, topology
+
 from conftest import EXAMPLES
 
 CONFIGS = {"two-level": EXAMPLES / "seed001_spmsm.toml", "t-type": EXAMPLES / "seed000_tlevel.toml"}

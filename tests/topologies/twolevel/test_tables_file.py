@@ -12,6 +12,7 @@ from codegen.cli import main
 from codegen.config import load_config
 from codegen.errors import ConfigError
 from codegen.topology import topology_of
+
 from conftest import EXAMPLES, SPMSM
 
 
