@@ -456,17 +456,6 @@ _CHECKS: dict[str, Callable[[_Checker, str, object, Spec], object]] = {
 # consistency between fields
 
 
-def _check_predictor_geometry(ck: _Checker) -> None:
-    v = ck.values
-    if v["controller.predictor"] == "flux-geometry" and v["motor.ld_h"] != v["motor.lq_h"]:
-        ck.fail(
-            "controller.predictor",
-            v["controller.predictor"],
-            'flux-geometry predictor needs Ld == Lq (surface PMSM); use predictor = "dq-euler" '
-            f"(motor.ld_h = {_num(v['motor.ld_h'])}, motor.lq_h = {_num(v['motor.lq_h'])})",  # type: ignore[arg-type]
-        )
-
-
 def _check_topology(ck: _Checker) -> None:
     v = ck.values
     strategy, topology = v["controller.strategy"], v["inverter.topology"]
@@ -483,15 +472,19 @@ def _check_topology(ck: _Checker) -> None:
         )
 
 
-def _check_three_level_motor(ck: _Checker) -> None:
+def _check_surface_pmsm(ck: _Checker) -> None:
+    """Ld == Lq where the model needs a surface PMSM: T-type MPDTC and the flux-geometry predictor."""
     v = ck.values
-    if v["inverter.topology"] == "t-type" and v["motor.ld_h"] != v["motor.lq_h"]:
-        ck.fail(
-            "controller.strategy",
-            v["controller.strategy"],
-            "three-level MPDTC needs Ld == Lq (surface PMSM model of the spec); "
-            f"motor.ld_h = {_num(v['motor.ld_h'])}, motor.lq_h = {_num(v['motor.lq_h'])}",  # type: ignore[arg-type]
-        )
+    if v["motor.ld_h"] == v["motor.lq_h"]:
+        return
+    inductances = f"motor.ld_h = {_num(float(v['motor.ld_h']))}, motor.lq_h = {_num(float(v['motor.lq_h']))}"  # type: ignore[arg-type]
+    if v["inverter.topology"] == "t-type":
+        ck.fail("controller.strategy", v["controller.strategy"],
+                f"t-type MPDTC needs Ld == Lq (surface PMSM model); {inductances}")
+    if v["controller.predictor"] == "flux-geometry":
+        ck.fail("controller.predictor", v["controller.predictor"],
+                'flux-geometry predictor needs Ld == Lq (surface PMSM); use predictor = "dq-euler" '
+                f"({inductances})")
 
 
 def _check_tables_file(ck: _Checker) -> None:
@@ -508,8 +501,7 @@ def _check_tables_file(ck: _Checker) -> None:
 _CONSISTENCY: tuple[Callable[[_Checker], None], ...] = (
     _check_topology,
     _check_tables_file,
-    _check_three_level_motor,
-    _check_predictor_geometry,
+    _check_surface_pmsm,
 )
 
 
