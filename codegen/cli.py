@@ -11,7 +11,7 @@ import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
-from codegen import __version__
+from codegen import __version__, cliargs
 from codegen.errors import ConfigError, MpcgenError, UsageError
 from codegen.model import Model
 from codegen.topology import topology_of
@@ -63,14 +63,8 @@ def _load(args: argparse.Namespace) -> Model:
 
 
 def _strategies(args: argparse.Namespace, model: Model) -> list[str]:
-    family = topology_of(model).strategies
-    if getattr(args, "strategies", None):
-        chosen = [s.strip() for s in args.strategies.split(",") if s.strip()]
-        for s in chosen:
-            if s not in family:
-                raise UsageError(f"--strategies: '{s}' is not a strategy of a {model.inverter.topology} inverter; allowed: {', '.join(family)}")
-        return chosen
-    return list(family)
+    return cliargs.strategy_list("--strategies", getattr(args, "strategies", None), model,
+                                 topology_of(model).strategies)
 
 
 def _write_json(path: str | None, data: dict) -> None:
@@ -84,8 +78,9 @@ def cmd_generate(args: argparse.Namespace) -> int:
     from codegen.stages.generate import generate
 
     model = _load(args)
+    out = cliargs.output_dir("-o", args.output)
     log = _log(args.quiet)
-    paths = generate(model, Path(args.output), log=log)
+    paths = generate(model, out, log=log)
     for p in paths:
         print(p)
     return EXIT_OK
@@ -96,11 +91,12 @@ def cmd_verify(args: argparse.Namespace) -> int:
     from codegen.stages.verify import verify_strategy
 
     model = _load(args)
-    if args.states < 1:
-        raise UsageError(f"--states = {args.states}: must be >= 1")
+    cliargs.at_least("--states", args.states, 1)
+    cliargs.output_file("--json", args.json)
+    strategies = _strategies(args, model)
     log = _log(args.quiet)
     results = []
-    for s in _strategies(args, model):
+    for s in strategies:
         variant = model.with_controller(strategy=s)
         log(f"verify {model.name} / {s}: building and comparing {args.states} states")
         r = verify_strategy(variant, args.states, log=log, closed_loop=not args.no_closed_loop)
@@ -120,12 +116,15 @@ def cmd_verify(args: argparse.Namespace) -> int:
 # ---------------------------------------------------------------- simulate
 def cmd_simulate(args: argparse.Namespace) -> int:
     model = _load(args)
+    cliargs.output_file("--json", args.json)
+    plots = cliargs.output_dir("--plots", args.plots) if args.plots else None
     log = _log(args.quiet)
     topo = topology_of(model)
-    if args.sweep_eps:
-        data = topo.sweep_eps(model, args.sweep_eps, log=log)
+    if args.sweep_eps is not None:
+        eps = cliargs.check_sweep_eps("--sweep-eps", cliargs.sweep_values("--sweep-eps", args.sweep_eps), model)
+        data = topo.sweep_eps(model, eps, log=log)
     else:
-        data = topo.simulate(model, _strategies(args, model), Path(args.plots) if args.plots else None, log=log)
+        data = topo.simulate(model, _strategies(args, model), plots, log=log)
     print(data.pop("_table"))
     _write_json(args.json, data)
     return EXIT_OK
@@ -137,7 +136,9 @@ def cmd_tables(args: argparse.Namespace) -> int:
     if args.derive:
         if not args.output:
             raise UsageError("--derive needs -o FILE: the file the trained switch tables are written to")
-        print(topology_of(model).export_tables(model, Path(args.output), log=_log(args.quiet)))
+        out = cliargs.output_file("-o", args.output)
+        assert out is not None
+        print(topology_of(model).export_tables(model, out, log=_log(args.quiet)))
         return EXIT_OK
     if args.output:
         raise UsageError("-o FILE goes with --derive (write the trained switch tables)")
@@ -150,6 +151,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
     from codegen.stages.bench import bench
 
     model = _load(args)
+    cliargs.at_least("--repeats", args.repeats, 1)
+    cliargs.output_file("--json", args.json)
     data = bench(model, _strategies(args, model), emulated=args.emulated, repeats=args.repeats, log=_log(args.quiet))
     print(data.pop("_table"))
     _write_json(args.json, data)
@@ -163,24 +166,10 @@ def cmd_firmware(args: argparse.Namespace) -> int:
     model = _load(args)
     if args.board not in BOARDS:
         raise UsageError(f"--board = {args.board!r}: unknown board; allowed: {', '.join(BOARDS)}")
-    paths = write_firmware_project(model, topology_of(model).derive(model), args.board, Path(args.output))
+    out = cliargs.output_dir("-o", args.output)
+    paths = write_firmware_project(model, topology_of(model).derive(model), args.board, out)
     print(f"wrote {len(paths)} files to {args.output}; build with: make -C {args.output}")
     return EXIT_OK
-
-
-def _parse_sweep(text: str) -> list[float]:
-    try:
-        if ":" in text:
-            a, b, c = (float(v) for v in text.split(":"))
-            n = int(round((b - a) / c)) + 1
-            vals = [round(a + i * c, 10) for i in range(n)]
-        else:
-            vals = [float(v) for v in text.split(",")]
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"'{text}': expected START:STOP:STEP (e.g. 0.1:1.5:0.1) or a comma list") from None
-    if not vals or any(v < 0 for v in vals):
-        raise argparse.ArgumentTypeError(f"'{text}': thresholds must be >= 0")
-    return vals
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -206,7 +195,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--strategies", help="comma list (default: all of the topology)")
     s.add_argument("--json", help="write metrics as JSON")
     s.add_argument("--plots", help="directory for PNG plots")
-    s.add_argument("--sweep-eps", type=_parse_sweep, metavar="START:STOP:STEP",
+    s.add_argument("--sweep-eps", metavar="START:STOP:STEP",
                    help="threshold sweep of seed-001 Table 1/2 with strategy s1 (e.g. 0.1:1.5:0.1)")
     s.set_defaults(func=cmd_simulate)
 

@@ -75,5 +75,5 @@ def test_simulate_metrics_match_golden(name: str, tmp_path: Path) -> None:
     out = tmp_path / "sim.json"
     assert main(["simulate", str(EXAMPLES / f"{name}.toml"), "--json", str(out), "-q"]) == 0
     got = _strip(json.loads(out.read_text()))
-    want = json.loads((GOLDEN / f"simulate_{name}.json").read_text())
+    want = _strip(json.loads((GOLDEN / f"simulate_{name}.json").read_text()))
     assert json.loads(json.dumps(got, sort_keys=True)) == want
