@@ -59,7 +59,10 @@ def _load(args: argparse.Namespace) -> Model:
         v = getattr(args, attr, None)
         if v is not None:
             overrides[key] = v
-    return load_config(args.config, overrides)
+    model = load_config(args.config, overrides)
+    for w in model.warnings:
+        print(f"mpcgen: warning: {w}", file=sys.stderr)
+    return model
 
 
 def _strategies(args: argparse.Namespace, model: Model) -> list[str]:

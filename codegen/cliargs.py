@@ -55,8 +55,14 @@ def output_file(option: str, path: str | Path | None) -> Path | None:
     if f.is_dir():
         raise UsageError(f"{option} = {f}: is a folder; give a file name")
     _writable_dir(option, f.parent, "folder of the output file")
-    if f.exists() and not os.access(f, os.W_OK):
-        raise UsageError(f"{option} = {f}: the file is not writable")
+    existed = f.exists()
+    try:  # the only reliable test (root passes os.access on /proc): open it for appending
+        with open(f, "a"):
+            pass
+    except OSError as exc:
+        raise UsageError(f"{option} = {f}: cannot write the file ({exc.strerror or exc})") from None
+    if not existed:
+        f.unlink()
     return f
 
 

@@ -43,6 +43,7 @@ from codegen.model import (
     SpeedMode,
     Topology,
 )
+from codegen.operating import operating_findings
 
 __all__ = ["load_config", "parse_override", "SCHEMA", "Spec", "Interval", "Ref"]
 
@@ -144,11 +145,11 @@ class Interval:
 REAL = "real"      # int or float (not bool), finite, in ``interval``
 INT = "int"        # int (not bool, not float), in ``interval``
 BOOL = "bool"      # true / false
-TEXT = "text"      # non-empty string
 CHOICE = "choice"  # string, one of ``choices``
 PREFIX = "prefix"  # C identifier prefix
 STEPS = "steps"    # [[time_s, value], ...] with values in ``interval``
 PATH = "path"      # optional file path, relative to the config file's folder; must exist
+NAME = "name"      # a name printed into generated C comments and Makefiles: printable ASCII, no comment delimiters
 
 
 @dataclass(frozen=True)
@@ -196,7 +197,7 @@ _RATED_RPM = "motor.rated_speed_rpm"
 #: Every config field, in check order (a :class:`Ref` must point upwards).
 #: The section of ``a.b.c`` is ``a.b``; the TOML layout follows from it.
 SCHEMA: dict[str, Spec] = {
-    "meta.name": Spec(TEXT),
+    "meta.name": Spec(NAME),
     "meta.prefix": Spec(PREFIX),
     "motor.rs_ohm": _real(_oc(0, 100)),
     "motor.ld_h": _real(_oc(0, 1)),
@@ -371,12 +372,6 @@ def _check_bool(ck: _Checker, path: str, value: object, spec: Spec) -> bool:
     return value
 
 
-def _check_text(ck: _Checker, path: str, value: object, spec: Spec) -> str:
-    if not isinstance(value, str) or not value.strip():
-        ck.fail(path, value, "must be a non-empty string")
-    return value
-
-
 def _check_path(ck: _Checker, path: str, value: object, spec: Spec) -> str | None:
     if value is None:
         return None
@@ -393,6 +388,19 @@ def resolve_path(config_file: str, value: str) -> Path:
     """A path from a config field: absolute, or relative to the config file's folder."""
     p = Path(value)
     return p if p.is_absolute() else Path(config_file).parent / p
+
+
+_NAME_RE = re.compile(r"[ -~]{1,80}")
+
+
+def _check_name(ck: _Checker, path: str, value: object, spec: Spec) -> str:
+    allowed = ("must be a non-empty string of at most 80 printable ASCII characters without '/*', '*/' or a backslash "
+               "(it is printed into generated C comments and Makefiles)")
+    if not isinstance(value, str) or not value.strip() or not _NAME_RE.fullmatch(value):
+        ck.fail(path, value, allowed)
+    if "/*" in value or "*/" in value or "\\" in value:
+        ck.fail(path, value, allowed)
+    return value
 
 
 def _check_choice(ck: _Checker, path: str, value: object, spec: Spec) -> str:
@@ -444,11 +452,11 @@ _CHECKS: dict[str, Callable[[_Checker, str, object, Spec], object]] = {
     REAL: _check_real,
     INT: _check_int,
     BOOL: _check_bool,
-    TEXT: _check_text,
     CHOICE: _check_choice,
     PREFIX: _check_prefix,
     STEPS: _check_steps,
     PATH: _check_path,
+    NAME: _check_name,
 }
 
 
@@ -650,7 +658,13 @@ def load_config(path: str | Path, overrides: Mapping[str, object] | None = None)
         ck.values[field_path] = _CHECKS[spec.kind](ck, field_path, raw[field_path], spec)
     for check in _CONSISTENCY:
         check(ck)
-    return _build(ck.values, source)
+    model = _build(ck.values, source)
+    findings = operating_findings(model)
+    for f in findings:
+        if f.error:
+            ck.fail(f.field, f.value, f.text)
+    return dataclasses.replace(model, warnings=tuple(
+        str(ConfigError(source, f.field, f.value, f.text)) for f in findings))
 
 
 def parse_override(text: str) -> tuple[str, object]:

@@ -120,6 +120,8 @@ class Model:
     speed_loop: SpeedLoop
     scenario: Scenario
     target: Target = "host"
+    #: one-line warnings of the operating-point checks (not part of the config hash)
+    warnings: tuple[str, ...] = field(default=(), compare=False)
 
     def replace(self, **sections: object) -> Model:
         """Return a copy with whole sections or top-level fields replaced."""
@@ -132,9 +134,10 @@ class Model:
         )
 
     def as_dict(self) -> dict:
-        """Plain-dict view (for JSON reports); ``source`` is left out."""
+        """Plain-dict view (for JSON reports); ``source`` and ``warnings`` are left out."""
         d = dataclasses.asdict(self)
         d.pop("source", None)
+        d.pop("warnings", None)
         return d
 
     def config_hash(self) -> str:

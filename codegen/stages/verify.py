@@ -63,7 +63,7 @@ def verify_strategy(
     if closed_loop:
         parts["closed_loop"] = evenly_spaced(topo.closed_loop_states(model, lib), n_states * 8 // 100)
     n_adv = min(200_000, n_states // 5)
-    parts["adversarial"] = topo.adversarial_states(model, tables, max(n_adv, 1))[:n_adv]
+    parts["adversarial"] = topo.adversarial_states(model, tables, max(n_adv, 1000))[:n_adv]
     n_random = max(n_states - sum(len(p) for p in parts.values()), 0)
     parts["random"] = topo.random_states(model, n_random, RANDOM_SEED)
     return compare_batches(model.controller.strategy, parts, lambda x: topo.step_batch(tables, x),

@@ -1,0 +1,109 @@
+"""A user's own motor, safely: operating-point checks at load time, names that reach C, CLI values.
+
+The motor is a 400 W servo (Rs 0.9 ohm, Ld = Lq 3.2 mH, psi_f 0.036 Wb,
+4 pole pairs, 3000 r/min, 1.27 N*m, Udc 310 V, dt 25 us): each case breaks one
+thing and must be refused (exit 2, one line naming file, field and value)
+or warned about, before any long run.
+"""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from codegen.cli import main
+from codegen.config import load_config
+from codegen.errors import ConfigError
+
+from conftest import SPMSM
+
+SERVO = {
+    "meta.name": "servo 400 W", "meta.prefix": "servo",
+    "motor.rs_ohm": 0.9, "motor.ld_h": 3.2e-3, "motor.lq_h": 3.2e-3, "motor.psi_f_wb": 0.036,
+    "motor.pole_pairs": 4, "motor.rated_speed_rpm": 3000.0, "motor.rated_torque_nm": 1.27,
+    "motor.j_kgm2": 5e-5, "inverter.udc_v": 310.0, "inverter.udc_min_v": 200.0, "inverter.udc_max_v": 400.0,
+    "inverter.i_trip_a": 20.0, "controller.dt_s": 25e-6, "controller.psi_ref_wb": 0.036,
+    "controller.eps_t_nm": 0.1, "controller.tables": "published", "speed_loop.kp": 0.05, "speed_loop.ki": 2.0,
+    "speed_loop.limit_nm": 3.0, "scenario.speed_ref_rpm": [[0.0, 1000.0]], "scenario.load_nm": [[0.0, 0.5]],
+    "scenario.duration_s": 0.5,
+}
+
+
+def servo(**changes: object):
+    return load_config(SPMSM, {**SERVO, **{k.replace("__", "."): v for k, v in changes.items()}})
+
+
+def test_servo_loads_clean():
+    assert servo().warnings == ()
+
+
+@pytest.mark.parametrize("change,field", [
+    ({"inverter__i_trip_a": 3.0}, "inverter.i_trip_a"),              # below the rated current 5.9 A
+    ({"inverter__udc_v": 48.0, "inverter__udc_min_v": 40.0, "inverter__udc_max_v": 60.0}, "inverter.udc_v"),
+    ({"controller__psi_ref_wb": 0.5}, "controller.psi_ref_wb"),       # 628 V at rated speed
+])
+def test_operating_point_errors(change, field):
+    with pytest.raises(ConfigError) as err:
+        servo(**change)
+    assert err.value.field == field and "\n" not in str(err.value)
+
+
+def test_operating_point_warnings(capsys, tmp_path):
+    m = servo(speed_loop__limit_nm=5.0)  # 23 A > i_trip 20 A
+    assert len(m.warnings) == 1 and "speed_loop.limit_nm" in m.warnings[0] and "trip" in m.warnings[0]
+    m = servo(inverter__udc_v=180.0, inverter__udc_min_v=100.0)  # 45 V back-EMF: 104 V linear, 115 V six-step
+    assert m.warnings == () or "inverter.udc_v" in m.warnings[0]
+    sets = [f"--set={k}={json.dumps(v)}" for k, v in SERVO.items()] + ["--set=speed_loop.limit_nm=5.0"]
+    assert main(["generate", str(SPMSM), *sets, "-o", str(tmp_path / "c"), "-q"]) == 0
+    assert "mpcgen: warning:" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("name", ["servo */ 400w", "a /* b", "back\\slash", "two\nlines", "x" * 81, "ümlaut"])
+def test_names_that_would_break_generated_c_are_refused(name):
+    with pytest.raises(ConfigError) as err:
+        servo(meta__name=name)
+    assert err.value.field == "meta.name"
+
+
+def _one_line_exit_2(capsys, args: list[str], *words: str) -> None:
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "Traceback" not in err[0], err
+    for w in words:
+        assert w in err[0], (w, err[0])
+
+
+@pytest.mark.parametrize("args,words", [
+    (["verify", "{cfg}", "--strategies", ""], ["--strategies"]),
+    (["verify", "{cfg}", "--strategies", " , "], ["--strategies"]),
+    (["bench", "{cfg}", "--repeats", "0"], ["--repeats"]),
+    (["bench", "{cfg}", "--repeats", "-3"], ["--repeats"]),
+    (["simulate", "{cfg}", "--sweep-eps", "0.1:0.5:0"], ["--sweep-eps", "STEP > 0"]),
+    (["simulate", "{cfg}", "--sweep-eps", "0.5:0.1:0.1"], ["--sweep-eps"]),
+    (["simulate", "{cfg}", "--sweep-eps", "0.5,12"], ["--sweep-eps", "rated_torque_nm"]),
+    (["simulate", "{cfg}", "--sweep-eps", "0.1:1000:0.0001"], ["--sweep-eps", "at most"]),
+    (["generate", "{cfg}", "-o", "{file}"], ["-o", "not a folder"]),
+    (["generate", "{cfg}", "-o", "/proc/x"], ["-o", "/proc/x"]),
+    (["firmware", "{cfg}", "--board", "host", "-o", "/proc/fw"], ["-o", "/proc/fw"]),
+    (["simulate", "{cfg}", "--plots", "{file}"], ["--plots"]),
+    (["verify", "{cfg}", "--json", "{dir}"], ["--json", "folder"]),
+    (["bench", "{cfg}", "--json", "/proc/x.json"], ["--json"]),
+    (["tables", "{cfg}", "--derive", "-o", "{dir}"], ["-o", "folder"]),
+])
+def test_bad_command_line_values(capsys, tmp_path: Path, args, words):
+    f = tmp_path / "a_file"
+    f.write_text("x")
+    subs = {"{cfg}": str(SPMSM), "{file}": str(f), "{dir}": str(tmp_path)}
+    _one_line_exit_2(capsys, [subs.get(a, a) for a in args] + ["-q"], *words)
+
+
+def test_verify_runs_exactly_the_states_asked_for(tmp_path):
+    out = tmp_path / "v.json"
+    assert main(["verify", str(SPMSM), "--states", "1", "--strategies", "s1", "--json", str(out), "-q"]) == 0
+    r = json.loads(out.read_text())["strategies"]["s1"]
+    assert r["states"] == 1 and r["mismatches"] == 0
+    assert main(["verify", str(SPMSM), "--states", "5000", "--strategies", "conventional", "--json", str(out),
+                 "-q"]) == 0
+    r = json.loads(out.read_text())["strategies"]["conventional"]
+    assert r["states"] == 5000 and sum(r["sources"].values()) == 5000 and r["sources"]["closed_loop"] == 400
