@@ -13,7 +13,7 @@ from pathlib import Path
 
 from codegen import __version__, cliargs
 from codegen.errors import ConfigError, MpcgenError, UsageError
-from codegen.model import Model
+from codegen.model import TARGETS, Model
 from codegen.topology import topology_of
 
 EXIT_OK, EXIT_FAIL, EXIT_BAD_INPUT = 0, 1, 2
@@ -40,7 +40,8 @@ def _add_config_args(p: argparse.ArgumentParser, target: bool = False) -> None:
     dc.add_argument("--delay-compensation", dest="delay", action="store_const", const=True, help="predict k+2 (one-step delay compensation)")
     dc.add_argument("--no-delay-compensation", dest="delay", action="store_const", const=False)
     if target:
-        p.add_argument("--target", help="override target.name (host, stm32h743, tms320f28377)")
+        p.add_argument("--target", help="override target.name (host, stm32h743, tms320f28377), "
+                                        "or 'all': one folder per target under -o")
     p.add_argument("--set", dest="sets", action="append", default=[], metavar="SECTION.FIELD=VALUE",
                    help="override any config field (repeatable), e.g. --set controller.eps_t_nm=0.5")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress output")
@@ -80,10 +81,16 @@ def _write_json(path: str | None, data: dict) -> None:
 def cmd_generate(args: argparse.Namespace) -> int:
     from codegen.stages.generate import generate
 
+    every = args.target == "all"
+    if every:
+        args.target = None
     model = _load(args)
     out = cliargs.output_dir("-o", args.output)
     log = _log(args.quiet)
-    paths = generate(model, out, log=log)
+    if every:  # one folder per target, same tables
+        paths = [p for t in TARGETS for p in generate(model.replace(target=t), out / t, log=log)]
+    else:
+        paths = generate(model, out, log=log)
     for p in paths:
         print(p)
     return EXIT_OK

@@ -26,12 +26,18 @@ import numpy as np
 
 from codegen.errors import MpcgenError
 from codegen.model import Model
-from codegen.stages.firmware import QEMU, build_firmware, make_test_sets, require_tools, write_firmware_project
+from codegen.stages.firmware import (
+    ICOUNT_SHIFT,
+    QEMU,
+    build_firmware,
+    make_test_sets,
+    qemu_command,
+    require_tools,
+    write_firmware_project,
+)
 from codegen.stages.fwdata import layouts
 from codegen.topology import topology_of
 
-#: Default -icount shift: 25.6 SysTick ticks per instruction.
-ICOUNT_SHIFT = 10
 #: SysTick clock of mps2-an500 (processor clock, CLKSOURCE=1).
 SYSTICK_HZ = 25_000_000
 
@@ -51,12 +57,6 @@ class QemuRun:
     pid: int
 
 
-def qemu_command(elf: Path, uart_log: Path, icount_shift: int = ICOUNT_SHIFT) -> list[str]:
-    """The QEMU command line (targets.md): headless, semihosting, -icount, UART0 to a file."""
-    return ["qemu-system-arm", "-M", "mps2-an500", "-cpu", "cortex-m7", "-m", "16M",
-            "-display", "none", "-monitor", "none",
-            "-semihosting-config", "enable=on,target=native",
-            "-icount", f"shift={icount_shift}", "-kernel", str(elf), "-serial", f"file:{uart_log}"]
 
 
 def _kill_group(proc: subprocess.Popen) -> None:
@@ -77,7 +77,7 @@ def run_qemu(elf: Path, *, timeout_s: float = 120.0, icount_shift: int = ICOUNT_
         raise EmulationError(f"firmware image {elf} does not exist: build the qemu-m7 project first")
     with tempfile.TemporaryDirectory(prefix="mpcgen-qemu-") as tmp:
         uart = Path(tmp) / "uart.log"
-        proc = subprocess.Popen(qemu_command(elf, uart, icount_shift), stdin=subprocess.DEVNULL,
+        proc = subprocess.Popen(qemu_command(elf, f"file:{uart}", icount_shift), stdin=subprocess.DEVNULL,
                                 stdout=subprocess.PIPE, stderr=subprocess.STDOUT, start_new_session=True)
         timed_out = False
         out = b""

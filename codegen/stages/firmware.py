@@ -69,6 +69,19 @@ class Tool:
     install: str  # one-line hint naming the package
 
 
+#: Default -icount shift of the emulated board: 25.6 SysTick ticks per instruction.
+ICOUNT_SHIFT = 10
+
+
+def qemu_command(elf: str | Path, serial: str, icount_shift: int = ICOUNT_SHIFT) -> list[str]:
+    """The emulated board's QEMU command line: mps2-an500 Cortex-M7, headless, semihosting exit,
+    -icount (instructions counted by SysTick), UART0 to ``serial`` (``stdio``, ``file:PATH``, ...)."""
+    return ["qemu-system-arm", "-M", "mps2-an500", "-cpu", "cortex-m7", "-m", "16M",
+            "-display", "none", "-monitor", "none",
+            "-semihosting-config", "enable=on,target=native",
+            "-icount", f"shift={icount_shift}", "-kernel", str(elf), "-serial", serial]
+
+
 @dataclass(frozen=True)
 class Board:
     """What differs between boards in a project."""
@@ -81,6 +94,7 @@ class Board:
     data_budget: int | None  # octets available to the embedded test data
     tools: tuple[Tool, ...]
     doc: str
+    run: str = ""  # `make run` command line (empty: the board has no run target)
 
 
 ARM_GCC = Tool("arm-none-eabi-gcc", "install the Debian packages gcc-arm-none-eabi and libnewlib-arm-none-eabi "
@@ -95,11 +109,12 @@ BOARDS: dict[str, Board] = {
     "stm32h743": Board("stm32h743", "stm32h743", "arm", ("cortex-m7", "stm32h743"), "stm32h743.ld",
                        1792 * 1024, (ARM_GCC, MAKE), "NUCLEO-H743ZI2, 400 MHz, step in ITCM, tables in DTCM"),
     "qemu-m7": Board("qemu-m7", "stm32h743", "arm", ("cortex-m7", "qemu-m7"), "qemu_m7.ld",
-                     3584 * 1024, (ARM_GCC, MAKE), "QEMU mps2-an500 emulated Cortex-M7"),
+                     3584 * 1024, (ARM_GCC, MAKE, QEMU), "QEMU mps2-an500 emulated Cortex-M7",
+                     " ".join(qemu_command("$(IMAGE)", "stdio"))),
     "tms320f28377": Board("tms320f28377", "tms320f28377", "c28x", ("tms320f28377",), "f28377s.cmd",
                           448 * 1024, (CL2000,), "LAUNCHXL-F28377S, C28x + FPU32 at 200 MHz"),
     "host": Board("host", "host", "host", ("host",), "", None, (HOST_GCC, MAKE),
-                  "host program (sanitizer builds)"),
+                  "host program (sanitizer builds)", "./$(IMAGE)"),
 }
 
 

@@ -193,10 +193,11 @@ def test_ttype_emulated_bench(tmp_path):
     assert s63["m7_instructions_per_step"] < s27["m7_instructions_per_step"]
 
 
-@needs_arm
+@needs_qemu
 @pytest.mark.slow
-def test_ttype_firmware_command_builds(tmp_path):
-    """`mpcgen firmware` on a t-type config writes a qemu-m7 project that builds (no two-level fallback)."""
+def test_ttype_firmware_command_builds_and_runs(tmp_path):
+    """`mpcgen firmware` on a t-type config writes a qemu-m7 project that builds (no two-level fallback)
+    and whose `make run` passes its self-test in QEMU."""
     import subprocess
 
     from codegen.cli import main
@@ -206,3 +207,5 @@ def test_ttype_firmware_command_builds(tmp_path):
     r = subprocess.run(["make", "-C", str(out)], capture_output=True, text=True)
     assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
     assert "tlevel_step" in (out / "gen" / "tlevel_mpc.c").read_text()
+    r = subprocess.run(["make", "-s", "-C", str(out), "run"], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0 and "RESULT PASS" in r.stdout, r.stdout[-2000:] + r.stderr[-2000:]

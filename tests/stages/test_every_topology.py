@@ -61,3 +61,12 @@ def test_firmware_project_is_the_configs_topology(tmp_path: Path, name: str):
         assert f" {f.name}" in header, f.name
     data = (out / "gen" / "mpc_selftest_data.c").read_text()
     assert topology(name).reference in data
+
+
+def test_generate_target_all_writes_every_target(tmp_path: Path):
+    from codegen.model import TARGETS
+
+    assert main(["generate", str(CONFIGS["t-type"]), "--target", "all", "-o", str(tmp_path), "-q"]) == 0
+    for t in TARGETS:
+        assert (tmp_path / t / "tlevel_mpc.c").is_file() and (tmp_path / t / "tlevel_report.md").is_file()
+    assert "ITCM" in (tmp_path / "stm32h743" / "tlevel_report.md").read_text()
