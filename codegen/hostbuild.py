@@ -15,6 +15,7 @@ import os
 import shutil
 import subprocess
 import sys
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
@@ -23,7 +24,9 @@ from typing import Any
 import cffi
 
 from codegen.errors import MpcgenError
-from codegen.records import RecordLayout
+from codegen.model import Model
+from codegen.numfmt import number_format
+from codegen.records import Record, RecordLayout
 from codegen.render import write_files
 
 #: Flags every build of generated C uses (README "Standards", numerics.md).
@@ -178,3 +181,12 @@ def _check_layout(lib: HostLib) -> None:
         for f in layout.fields:
             if ffi.offsetof(ctype, f.name) != dtype.fields[f.name][1]:
                 raise BuildError(f"{ctype}.{f.name}: C offset differs from numpy")
+
+
+def build_step_library(model: Model, tag: str, files: dict[str, str], cdef: str, records: tuple[Record, Record],
+                       sim: Callable[[], SimSources] | None = None) -> HostLib:
+    """A topology's host build: its rendered step (host profile) and cffi ``cdef``, its (input,
+    output) records bound to the model's number format, + the closed-loop simulator ``sim()`` gives."""
+    nf = number_format(model.controller.number_format)
+    return build_library(model.prefix, tag, files, cdef, Records(records[0].bind(nf), records[1].bind(nf)),
+                         sim() if sim is not None else None)

@@ -15,7 +15,9 @@ import jinja2
 
 from codegen import __version__
 from codegen.model import Model
+from codegen.numfmt import NumberFormat, number_format
 from codegen.numfmt.float32 import c_float_literal
+from codegen.records import Record
 from codegen.resources import templates_dir
 
 
@@ -46,8 +48,17 @@ PROFILES: dict[str, Profile] = {
 }
 
 
-def environment() -> jinja2.Environment:
-    """The jinja2 environment: strict undefined, C-float filter, no autoescape."""
+@dataclass(frozen=True)
+class TableRow:
+    """One row of a generated C table: its cells and the comment naming them."""
+
+    cells: tuple[int, ...]
+    label: str
+
+
+def environment(nf: NumberFormat | None = None) -> jinja2.Environment:
+    """The jinja2 environment: strict undefined, no autoescape, the C-float filter and, with a
+    number format, its ``real_literal`` filter (exact C literal of a value in the format)."""
     env = jinja2.Environment(
         loader=jinja2.FileSystemLoader(str(templates_dir())),
         undefined=jinja2.StrictUndefined,
@@ -55,13 +66,16 @@ def environment() -> jinja2.Environment:
         autoescape=False,
     )
     env.filters["c_float"] = c_float_literal
+    if nf is not None:
+        env.filters["real_literal"] = nf.literal
     return env
 
 
 def base_context(model: Model, target: str) -> dict:
-    """Context every generated file of ``model`` shares."""
+    """Context every generated file of ``model`` shares (with the number format's macro library)."""
     if target not in PROFILES:
         raise ValueError(f"unknown target {target!r}; allowed: {', '.join(PROFILES)}")
+    nf = number_format(model.controller.number_format)
     return {
         "model_name": model.name,
         "config_hash": model.config_hash(),
@@ -69,13 +83,41 @@ def base_context(model: Model, target: str) -> dict:
         "prefix": model.prefix,
         "PREFIX": model.prefix.upper(),
         "profile": PROFILES[target],
+        "number_format": nf.name,
+        "numfmt": nf.macros,
     }
 
 
 def render_files(templates: dict[str, str], ctx: dict) -> dict[str, str]:
-    """File name -> rendered text, for file name -> template path."""
-    env = environment()
+    """File name -> rendered text, for file name -> template path (in the context's number format)."""
+    env = environment(number_format(ctx["number_format"]) if "number_format" in ctx else None)
     return {name: env.get_template(tpl).render(ctx) for name, tpl in templates.items()}
+
+
+def step_context(model: Model, target: str, records: tuple[Record, Record],
+                 faults: tuple[tuple[str, int, str], ...], **values: object) -> dict:
+    """Context of a topology's step templates: the shared part (banner, number format, records,
+    fault bits) plus the topology's own ``values`` (constants, tables, guard checks ...)."""
+    nf = number_format(model.controller.number_format)
+    return {
+        **base_context(model, target),
+        "faults": faults,
+        "input_fields": records[0].bind(nf).members,
+        "output_fields": records[1].bind(nf).members,
+        **values,
+    }
+
+
+def render_step(model: Model, topology_dir: str, ctx: dict) -> dict[str, str]:
+    """File name -> text of a step: ``<topology_dir>/mpc.h.j2``, ``mpc.c.j2`` and the shared binding."""
+    p = model.prefix
+    return render_files({f"{p}_mpc.h": f"{topology_dir}/mpc.h.j2", f"{p}_mpc.c": f"{topology_dir}/mpc.c.j2",
+                         "mpc_binding.h": "common/binding.h.j2"}, ctx)
+
+
+def render_step_cdef(ctx: dict) -> str:
+    """cffi declarations (no preprocessor lines) of a step's host build."""
+    return render_files({"cdef": "common/cdef.h.j2"}, ctx)["cdef"]
 
 
 def write_files(files: dict[str, str], outdir: Path) -> list[Path]:

@@ -1,4 +1,4 @@
-"""Generated sin/cos of the rotor angle in float32 (numerics.md "Float32 path").
+"""Generated sin/cos of the rotor angle (numerics.md "Float32 path").
 
 The step needs sin and cos of theta_e without libm.  The generator emits a
 fixed sequence of single float32 operations; ``sincos_f32`` below performs
@@ -20,10 +20,12 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import Any
 
 import numpy as np
 
-from codegen.numfmt.float32 import f32
+from codegen.numfmt import Ops
+from codegen.numfmt.float32 import FLOAT32, f32
 
 #: Largest |theta_e| the step accepts (rad); beyond it the input guard trips.
 ANGLE_GUARD_RAD = 256.0
@@ -79,39 +81,46 @@ def sincos_coeffs() -> SinCosCoeffs:
     )
 
 
+def sincos(ops: Ops, x: Any, k: SinCosCoeffs | None = None) -> tuple[Any, Any]:
+    """sin and cos of ``x`` through the format's ``ops``: the exact operation sequence of the C
+    (``templates/common/kernels.j2`` ``sincos_fn``)."""
+    k = k or sincos_coeffs()
+    x = ops.array(x)
+    half = ops.const(0.5)
+    y = ops.mul(x, k.two_over_pi)
+    yr = ops.add(y, ops.where(ops.ge(y, ops.const(0.0)), half, ops.neg(half)))
+    n = ops.trunc_int(yr)
+    fn = ops.from_int(n)
+    t = ops.mul(fn, k.pio2_hi)
+    r = ops.sub(x, t)
+    t = ops.mul(fn, k.pio2_lo)
+    r = ops.sub(r, t)
+    r2 = ops.mul(r, r)
+    ps = ops.mul(k.s[2], r2)
+    ps = ops.add(ps, k.s[1])
+    ps = ops.mul(ps, r2)
+    ps = ops.add(ps, k.s[0])
+    ps = ops.mul(ps, r2)
+    ps = ops.mul(ps, r)
+    sr = ops.add(r, ps)
+    pc = ops.mul(k.c[3], r2)
+    pc = ops.add(pc, k.c[2])
+    pc = ops.mul(pc, r2)
+    pc = ops.add(pc, k.c[1])
+    pc = ops.mul(pc, r2)
+    pc = ops.add(pc, k.c[0])
+    pc = ops.mul(pc, r2)
+    cr = ops.add(ops.const(1.0), pc)
+    q = n & 3
+    quadrant = [q == 0, q == 1, q == 2]
+    s_out = ops.select(quadrant, [sr, cr, ops.neg(sr)], ops.neg(cr))
+    c_out = ops.select(quadrant, [cr, ops.neg(sr), ops.neg(cr)], sr)
+    return s_out, c_out
+
+
 def sincos_f32(x: np.ndarray, k: SinCosCoeffs | None = None) -> tuple[np.ndarray, np.ndarray]:
     """sin and cos of float32 ``x``, the exact operation sequence of the C."""
-    k = k or sincos_coeffs()
-    x = np.asarray(x, dtype=np.float32)
-    half = np.float32(0.5)
-    y = x * k.two_over_pi
-    yr = y + np.where(y >= np.float32(0.0), half, -half).astype(np.float32)
-    n = np.trunc(yr).astype(np.int32)
-    fn = n.astype(np.float32)
-    t = fn * k.pio2_hi
-    r = x - t
-    t = fn * k.pio2_lo
-    r = r - t
-    r2 = r * r
-    ps = k.s[2] * r2
-    ps = ps + k.s[1]
-    ps = ps * r2
-    ps = ps + k.s[0]
-    ps = ps * r2
-    ps = ps * r
-    sr = r + ps
-    pc = k.c[3] * r2
-    pc = pc + k.c[2]
-    pc = pc * r2
-    pc = pc + k.c[1]
-    pc = pc * r2
-    pc = pc + k.c[0]
-    pc = pc * r2
-    cr = np.float32(1.0) + pc
-    q = n & 3
-    s_out = np.select([q == 0, q == 1, q == 2], [sr, cr, -sr], -cr).astype(np.float32)
-    c_out = np.select([q == 0, q == 1, q == 2], [cr, -sr, -cr], sr).astype(np.float32)
-    return s_out, c_out
+    return sincos(FLOAT32.ops, x, k)
 
 
 def sincos_constants() -> list[tuple[str, np.float32, str, str]]:

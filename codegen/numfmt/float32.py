@@ -9,13 +9,14 @@ spelling of the operations is ``templates/numfmt/float32.j2``.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
-__all__ = ["F", "f32", "c_float_literal", "Float32", "FLOAT32"]
+__all__ = ["F", "f32", "c_float_literal", "Float32Ops", "Float32", "FLOAT32"]
 
-#: numpy scalar type of a float32 value (the reference's working type)
+#: numpy scalar type of a float32 value (test-state builders; the references use ``Float32Ops``)
 F = np.float32
 
 
@@ -42,6 +43,98 @@ def c_float_literal(x: float | np.floating) -> str:
     return f"{mant}p{exp}f"
 
 
+class Float32Ops:
+    """The reference's arithmetic in float32: each helper is one numpy operation.
+
+    Every element-wise numpy operation on float32 operands rounds once, like
+    one C float operation under ``-ffp-contract=off``; operand order is kept
+    as written (the helpers never reassociate or fuse).  A fixed-point
+    backend provides the same helpers with its own rounding and scaling.
+    """
+
+    real = np.float32
+
+    def const(self, x: float) -> np.float32:
+        """A literal value of the format (rounded once)."""
+        return np.float32(x)
+
+    def array(self, values: Any) -> np.ndarray:
+        """An array of values of the format (table data already in the format)."""
+        return np.asarray(values, dtype=np.float32)
+
+    def zeros(self, shape: Any) -> np.ndarray:
+        """Zeros of the format."""
+        return np.zeros(shape, np.float32)
+
+    def add(self, a: Any, b: Any) -> Any:
+        """a + b, one rounding."""
+        return a + b
+
+    def sub(self, a: Any, b: Any) -> Any:
+        """a - b, one rounding."""
+        return a - b
+
+    def mul(self, a: Any, b: Any) -> Any:
+        """a * b, one rounding."""
+        return a * b
+
+    def div(self, a: Any, b: Any) -> Any:
+        """a / b, one rounding (IEEE division)."""
+        return a / b
+
+    def neg(self, a: Any) -> Any:
+        """-a (exact)."""
+        return -a
+
+    def abs(self, a: Any) -> Any:
+        """|a| (exact)."""
+        return np.abs(a)
+
+    def sqrt(self, a: Any) -> Any:
+        """Square root, correctly rounded."""
+        return np.sqrt(a)
+
+    def lt(self, a: Any, b: Any) -> np.ndarray:
+        """a < b (False for NaN)."""
+        return a < b
+
+    def le(self, a: Any, b: Any) -> np.ndarray:
+        """a <= b (False for NaN)."""
+        return a <= b
+
+    def gt(self, a: Any, b: Any) -> np.ndarray:
+        """a > b (False for NaN)."""
+        return a > b
+
+    def ge(self, a: Any, b: Any) -> np.ndarray:
+        """a >= b (False for NaN)."""
+        return a >= b
+
+    def eq(self, a: Any, b: Any) -> np.ndarray:
+        """a == b."""
+        return a == b
+
+    def ne(self, a: Any, b: Any) -> np.ndarray:
+        """a != b (True for NaN)."""
+        return a != b
+
+    def where(self, cond: Any, a: Any, b: Any) -> np.ndarray:
+        """Per lane: a where cond, else b (a selection, no arithmetic)."""
+        return np.where(cond, a, b).astype(np.float32)
+
+    def select(self, conds: list[Any], choices: list[Any], default: Any) -> np.ndarray:
+        """Per lane: the first choice whose condition holds, else default."""
+        return np.select(conds, choices, default).astype(np.float32)
+
+    def trunc_int(self, a: Any) -> np.ndarray:
+        """Conversion to int32 by truncation toward zero (C's ``(int32_t)x``)."""
+        return np.trunc(a).astype(np.int32)
+
+    def from_int(self, n: Any) -> np.ndarray:
+        """Conversion of an integer to the format (C's ``(float)n``)."""
+        return np.asarray(n).astype(np.float32)
+
+
 @dataclass(frozen=True)
 class Float32:
     """The float32 backend of :class:`codegen.numfmt.NumberFormat`."""
@@ -51,6 +144,7 @@ class Float32:
     bits_dtype: np.dtype = np.dtype(np.uint32)
     c_type: str = "float"
     macros: str = "numfmt/float32.j2"
+    ops: Float32Ops = field(default_factory=Float32Ops)
 
     def const(self, x: float) -> np.float32:
         return f32(x)

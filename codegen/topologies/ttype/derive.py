@@ -1,4 +1,4 @@
-"""Derived tables and float32 constants of the three-level MPDTC step.
+"""Derived tables and constants of the three-level MPDTC step.
 
 Everything the generated C (templates/ttype) and the Python reference
 (``reference.py``) share is computed here, once: gains in float64 rounded
@@ -21,18 +21,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from codegen.kernels.trig import ANGLE_GUARD_RAD, sincos_constants
+from codegen.kernels.consts import Const, HasConsts, leading_constants, sector_constants
+from codegen.kernels.consts import guard_limits as shared_guard_limits
+from codegen.kernels.dq import DqModel
 from codegen.model import Model
-from codegen.numfmt.float32 import f32
+from codegen.numfmt import NumberFormat, number_format
 from codegen.topologies.ttype import candidates as cd
 from codegen.topologies.ttype import vectors as v
 from codegen.topologies.ttype import virtual as vv
-from codegen.topologies.twolevel.derive import Const
-from codegen.units import GUARD_UNITS
 
 
 @dataclass(frozen=True)
-class ThreeLevelTables:
+class ThreeLevelTables(HasConsts):
     """What a three-level step needs, derived once from a Model."""
 
     prefix: str
@@ -53,12 +53,8 @@ class ThreeLevelTables:
     groups: tuple[tuple[int, ...], ...]  # member vector ids per group
     row_labels: tuple[str, ...]
     group_labels: tuple[str, ...]
+    number_format: str = "float32"
 
-    def const(self, name: str) -> np.float32:
-        for c in self.consts:
-            if c.name == name:
-                return c.value
-        raise KeyError(name)
 
     @property
     def row_n(self) -> tuple[int, ...]:
@@ -89,18 +85,13 @@ class ThreeLevelTables:
         return a
 
 
+#: the dq model's constants by name (codegen.kernels.dq; the templates' dq_fns and flux)
+DQ = DqModel("LS_H", "LS_H", "PSI_F_WB", "RS_OHM", "A_S", "A_S")
+
+
 def guard_limits(model: Model) -> dict[str, float]:
-    """Input-guard limits (numerics.md "Inputs are guarded"), float64."""
-    m, inv, sl = model.motor, model.inverter, model.speed_loop
-    rated_omega_e = m.rated_speed_rpm * 2 * math.pi / 60 * m.pole_pairs
-    return {
-        "I_TRIP_A": inv.i_trip_a,
-        "UC_MIN_V": inv.udc_min_v / 2.0,
-        "UC_MAX_V": inv.udc_max_v / 2.0,
-        "ANGLE_GUARD_RAD": ANGLE_GUARD_RAD,
-        "OMEGA_GUARD_RAD_S": 5.0 * rated_omega_e,
-        "TORQUE_REF_GUARD_NM": 4.0 * max(sl.limit_nm, m.rated_torque_nm),
-    }
+    """Input-guard limits (numerics.md "Inputs are guarded"), float64: each capacitor at half the DC link's."""
+    return shared_guard_limits(model, "UC_MIN_V", "UC_MAX_V", 0.5)
 
 
 def t_n_min(model: Model) -> float:
@@ -109,35 +100,31 @@ def t_n_min(model: Model) -> float:
     return c.dt_s / 6.0 if c.t_n_min_s is None else c.t_n_min_s
 
 
-def _constants(model: Model) -> list[Const]:
+def _constants(model: Model, nf: NumberFormat) -> list[Const]:
     m, c, inv = model.motor, model.controller, model.inverter
     ts = c.dt_s
-    out: list[Const] = [Const(*c) for c in sincos_constants()]
-    for name, val in guard_limits(model).items():
-        out.append(Const(name, f32(val), GUARD_UNITS.get(name, ""), "input guard limit"))
+    f = nf.const
+    out = leading_constants(nf, guard_limits(model))
     out += [
-        Const("INV_SQRT3", f32(1 / math.sqrt(3)), "", "Clarke: i_beta = (i_a + 2 i_b)/sqrt(3)"),
-        Const("SQRT3_2", f32(math.sqrt(3) / 2), "", "inverse Clarke: i_b = -i_alpha/2 + sqrt(3)/2 i_beta"),
-        Const("HALF", f32(0.5), "", "1/2"),
-        Const("LS_H", f32(m.ld_h), "H", "Ls = Ld = Lq: psi_d = Ls i_d + psi_f, psi_q = Ls i_q"),
-        Const("PSI_F_WB", f32(m.psi_f_wb), "Wb", "magnet flux"),
-        Const("PSI_F_SQ", f32(m.psi_f_wb ** 2), "Wb^2", "psi_f^2 (MTPA psi*)"),
-        Const("TE_PSI", f32(1.5 * m.pole_pairs * m.psi_f_wb), "N*m/A", "Te = 1.5 np psi_f i_q"),
-        Const("INV_TE_PSI", f32(1.0 / (1.5 * m.pole_pairs * m.psi_f_wb)), "A/(N*m)", "i_q_ref = T_ref / (1.5 np psi_f)"),
-        Const("RS_OHM", f32(m.rs_ohm), "ohm", "stator resistance"),
-        Const("A_S", f32(ts / m.ld_h), "s/H", "Euler: i+ = i + Ts/Ls (u - Rs i +- rotation - w psi_f)"),
-        Const("TS_S", f32(ts), "s", "control period Ts"),
-        Const("INV_TS", f32(1.0 / ts), "1/s", "deadbeat u* = (psi_ref - psi(k+1))/Ts + Rs i(k+1)"),
-        Const("TS3_S", f32(ts / 3.0), "s", "Ts/3: T_b = T_c, T_N + T_P (eq. (8)-(9))"),
-        Const("TS6_S", f32(ts / 6.0), "s", "Ts/6: T_b/2 = T_c/2"),
-        Const("TN_MIN_S", f32(t_n_min(model)), "s", "T_N clamp minimum (eq. (10)-(11))"),
-        Const("K_VO", f32(1.0 / (2.0 * inv.c_f)), "V/C", "dV_o/dt = i_o/(2C)"),
-        Const("TWO_C", f32(2.0 * inv.c_f), "F", "2C: T_N deadbeat numerator V_o 2C"),
-        Const("LAMBDA_PSI", f32(c.lambda_psi_nm_per_wb), "N*m/Wb", "eq. (7) lambda1"),
-        Const("LAMBDA_VO", f32(c.lambda_vo_nm_per_v), "N*m/V", "eq. (7) lambda2"),
-        Const("TAN30", f32(math.tan(math.pi / 6)), "", "u* sector borders at 30 deg multiples"),
-        Const("TAN60", f32(math.tan(math.pi / 3)), "", "tan(60 deg): sector borders"),
-    ]
+        Const("SQRT3_2", f(math.sqrt(3) / 2), "", "inverse Clarke: i_b = -i_alpha/2 + sqrt(3)/2 i_beta"),
+        Const("HALF", f(0.5), "", "1/2"),
+        Const("LS_H", f(m.ld_h), "H", "Ls = Ld = Lq: psi_d = Ls i_d + psi_f, psi_q = Ls i_q"),
+        Const("PSI_F_WB", f(m.psi_f_wb), "Wb", "magnet flux"),
+        Const("PSI_F_SQ", f(m.psi_f_wb ** 2), "Wb^2", "psi_f^2 (MTPA psi*)"),
+        Const("TE_PSI", f(1.5 * m.pole_pairs * m.psi_f_wb), "N*m/A", "Te = 1.5 np psi_f i_q"),
+        Const("INV_TE_PSI", f(1.0 / (1.5 * m.pole_pairs * m.psi_f_wb)), "A/(N*m)", "i_q_ref = T_ref / (1.5 np psi_f)"),
+        Const("RS_OHM", f(m.rs_ohm), "ohm", "stator resistance"),
+        Const("A_S", f(ts / m.ld_h), "s/H", "Euler: i+ = i + Ts/Ls (u - Rs i +- rotation - w psi_f)"),
+        Const("TS_S", f(ts), "s", "control period Ts"),
+        Const("INV_TS", f(1.0 / ts), "1/s", "deadbeat u* = (psi_ref - psi(k+1))/Ts + Rs i(k+1)"),
+        Const("TS3_S", f(ts / 3.0), "s", "Ts/3: T_b = T_c, T_N + T_P (eq. (8)-(9))"),
+        Const("TS6_S", f(ts / 6.0), "s", "Ts/6: T_b/2 = T_c/2"),
+        Const("TN_MIN_S", f(t_n_min(model)), "s", "T_N clamp minimum (eq. (10)-(11))"),
+        Const("K_VO", f(1.0 / (2.0 * inv.c_f)), "V/C", "dV_o/dt = i_o/(2C)"),
+        Const("TWO_C", f(2.0 * inv.c_f), "F", "2C: T_N deadbeat numerator V_o 2C"),
+        Const("LAMBDA_PSI", f(c.lambda_psi_nm_per_wb), "N*m/Wb", "eq. (7) lambda1"),
+        Const("LAMBDA_VO", f(c.lambda_vo_nm_per_v), "N*m/V", "eq. (7) lambda2"),
+    ] + sector_constants(nf)
     return out
 
 
@@ -187,18 +174,20 @@ def derive_three_level(model: Model) -> ThreeLevelTables:
             idx.append(index[g])
         row_groups.append(tuple(idx))
     ux, uy = vv.vector_voltages()
+    nf = number_format(model.controller.number_format)
+    f = nf.const
     seq = []
     for i in range(vv.N_VECTORS):
         seq.append(vv.virtual_of(i).sequence if vv.is_virtual(i) else (i,) * 7)
     return ThreeLevelTables(
         prefix=model.prefix,
         strategy=strategy,
-        consts=tuple(_constants(model)),
-        io_a=tuple(f32(s.io[0]) for s in v.STATES),
-        io_b=tuple(f32(s.io[1]) for s in v.STATES),
-        io_c=tuple(f32(s.io[2]) for s in v.STATES),
-        ux=tuple(f32(x) for x in ux),
-        uy=tuple(f32(y) for y in uy),
+        consts=tuple(_constants(model, nf)),
+        io_a=tuple(f(s.io[0]) for s in v.STATES),
+        io_b=tuple(f(s.io[1]) for s in v.STATES),
+        io_c=tuple(f(s.io[2]) for s in v.STATES),
+        ux=tuple(f(x) for x in ux),
+        uy=tuple(f(y) for y in uy),
         is_virtual=tuple(int(vv.is_virtual(i)) for i in range(vv.N_VECTORS)),
         seq=tuple(seq),
         end_state=tuple(vv.end_state(i) for i in range(vv.N_VECTORS)),
@@ -207,4 +196,5 @@ def derive_three_level(model: Model) -> ThreeLevelTables:
         groups=tuple(groups),
         row_labels=tuple(labels),
         group_labels=tuple(_group_label(g) for g in groups),
+        number_format=nf.name,
     )

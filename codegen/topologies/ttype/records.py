@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...kernels.guard import AllAtLeast, AllAtMost, Check, IndexAtMost, RealInRangeWhen, fault_bits, motor_checks
 from ...numfmt.float32 import FLOAT32
 from ...records import MOTOR_INPUT_FIELDS, REAL, U16, Field, Record
 
@@ -58,17 +59,24 @@ OUTPUT_FIELDS: tuple[Field, ...] = (
     Field("cand", U16, N_MAX_EVAL, "resolved member (vector id) of group j; 0 beyond n_eval"),
 )
 
-#: Fault bits of the input guard (numerics.md "Inputs are guarded").
-FAULT_BITS: tuple[tuple[str, int, str], ...] = (
-    ("CURRENT", 1, "|i_a|, |i_b| or |i_c| above i_trip_a, or not finite"),
-    ("UDC_LOW", 2, "uc1 or uc2 below udc_min_v/2, or not finite"),
-    ("UDC_HIGH", 4, "uc1 or uc2 above udc_max_v/2, or not finite"),
-    ("ANGLE", 8, "|theta_e| above the angle guard, or not finite"),
-    ("SPEED", 16, "|omega_e| above the speed guard, or not finite"),
-    ("TORQUE_REF", 32, "|T*| above the torque-reference guard, or not finite"),
-    ("STATE", 64, "prev_vector is not a vector id 0..62"),
-    ("TN_PREV", 128, "prev_vector virtual and t_n_prev_s outside [0, Ts/3] or not finite"),
+#: first virtual vector id; ids above N_IDS - 1 are not vectors
+FIRST_VIRTUAL = 27
+N_IDS = 63
+
+#: The input guard as data (numerics.md "Inputs are guarded"), evaluated by codegen.kernels.guard.
+GUARD: tuple[Check, ...] = motor_checks() + (
+    AllAtLeast("UDC_LOW", ("uc1_v", "uc2_v"), "UC_MIN_V"),
+    AllAtMost("UDC_HIGH", ("uc1_v", "uc2_v"), "UC_MAX_V"),
+    IndexAtMost("STATE", "prev_vector", N_IDS - 1),
+    RealInRangeWhen("TN_PREV", "t_n_prev_s", None, "TS3_S", "prev_vector", FIRST_VIRTUAL, N_IDS - 1),
 )
+#: Fault bits of the input guard: (name, bit, meaning).
+FAULT_BITS: tuple[tuple[str, int, str], ...] = fault_bits({
+    "UDC_LOW": "uc1 or uc2 below udc_min_v/2, or not finite",
+    "UDC_HIGH": "uc1 or uc2 above udc_max_v/2, or not finite",
+    "STATE": "prev_vector is not a vector id 0..62",
+    "TN_PREV": "prev_vector virtual and t_n_prev_s outside [0, Ts/3] or not finite",
+}, extra=("TN_PREV",))
 FAULT = {name: bit for name, bit, _ in FAULT_BITS}
 
 #: safe decision on a tripped guard: OOO for the whole period

@@ -1,6 +1,6 @@
-"""Python reference of the three-level MPDTC step: numpy float32, vectorised.
+"""Python reference of the three-level MPDTC step, vectorised, through the number format's ops.
 
-One numpy element-wise operation per C operation, in the C's order
+One ``ops`` helper per C operation, in the C's order
 (numerics.md "Expression order is fixed"), over a batch of input records of
 ``interface.INPUT_DTYPE``.  The generated C (templates/ttype/mpc.c.j2)
 is the other, independent implementation of the same sequence;
@@ -9,7 +9,8 @@ is the other, independent implementation of the same sequence;
 Step (mpdtc-three-level.md; equation numbers are seed 000's):
 1. input guard (numerics.md);  Udc = uc1 + uc2, V_o = (uc1 - uc2)/2.
 2. sin/cos of theta_e at k, k+1 = theta + w Ts and k+2 = theta + 2 w Ts
-   (codegen.trig); Clarke/Park of the sampled currents with theta(k).
+   (codegen.kernels.trig); Clarke/Park of the sampled currents with theta(k)
+   (codegen.kernels.frames).
 3. delay compensation (eq. (3)-(6)): forward-Euler dq step k -> k+1 under
    the applied vector's period-average voltage (rotated with theta(k)), and
    V_o(k+1) = V_o(k) + Q/(2C) with Q its net midpoint charge over the period
@@ -24,7 +25,7 @@ Step (mpdtc-three-level.md; equation numbers are seed 000's):
    that, with no division, no clamp and no inverse trigonometry (the spec's
    asin / sqrt(1 - s^2) formula, algebraically identical).
    Sector of u*: 12 sectors of 30 deg by comparisons (mptc-two-level.md
-   Conventions; same function as the two-level step).
+   Conventions; codegen.kernels.sector, shared with the two-level step).
 5. candidates: mpdtc63 the derived Table 3 row (end state of prev_vector,
    sector of u*); mpdtc27 all 19 voltage groups of the 27 states.
    Each group is resolved to the member with the smallest predicted
@@ -42,181 +43,134 @@ Step (mpdtc-three-level.md; equation numbers are seed 000's):
 """
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
-from codegen.kernels.trig import sincos_f32
-from codegen.topologies.ttype.derive import ThreeLevelTables
-from codegen.topologies.ttype.records import FAULT, INPUT_DTYPE, N_MAX_EVAL, N_SEGMENTS, OUTPUT_DTYPE, SAFE_STATE
-from codegen.topologies.twolevel.reference import sector12
-
-F = np.float32
-FIRST_VIRTUAL = 27
-N_IDS = 63
-
-
-class _K:
-    """Attribute access to the float32 constants of a ThreeLevelTables."""
-
-    def __init__(self, t: ThreeLevelTables) -> None:
-        for c in t.consts:
-            setattr(self, c.name, c.value)
+from codegen.kernels import dq, frames
+from codegen.kernels.batch import run_batch, zero_faulted
+from codegen.kernels.consts import Constants
+from codegen.kernels.guard import evaluate
+from codegen.kernels.sector import sector12
+from codegen.kernels.trig import sincos
+from codegen.numfmt import Ops, number_format
+from codegen.records import REAL
+from codegen.topologies.ttype.derive import DQ, ThreeLevelTables
+from codegen.topologies.ttype.records import FAULT, GUARD, INPUT, N_MAX_EVAL, N_SEGMENTS, OUTPUT, SAFE_STATE
 
 
 def guard(t: ThreeLevelTables, x: np.ndarray) -> np.ndarray:
     """Fault bits per state (numerics.md: non-finite or out-of-range inputs)."""
-    k = _K(t)
-    ia, ib = x["ia_a"], x["ib_a"]
-    ic = -(ia + ib)
-    u1, u2 = x["uc1_v"], x["uc2_v"]
-    pv = x["prev_vector"]
-    tnp = x["t_n_prev_s"]
-    fault = np.zeros(len(x), np.uint16)
-
-    def bit(ok: np.ndarray, name: str) -> None:
-        nonlocal fault
-        fault |= np.where(ok, 0, FAULT[name]).astype(np.uint16)
-
-    bit((np.abs(ia) <= k.I_TRIP_A) & (np.abs(ib) <= k.I_TRIP_A) & (np.abs(ic) <= k.I_TRIP_A), "CURRENT")
-    bit((u1 >= k.UC_MIN_V) & (u2 >= k.UC_MIN_V), "UDC_LOW")
-    bit((u1 <= k.UC_MAX_V) & (u2 <= k.UC_MAX_V), "UDC_HIGH")
-    bit(np.abs(x["theta_e_rad"]) <= k.ANGLE_GUARD_RAD, "ANGLE")
-    bit(np.abs(x["omega_e_rad_s"]) <= k.OMEGA_GUARD_RAD_S, "SPEED")
-    bit(np.abs(x["torque_ref_nm"]) <= k.TORQUE_REF_GUARD_NM, "TORQUE_REF")
-    bit(pv <= N_IDS - 1, "STATE")
-    virt = (pv >= FIRST_VIRTUAL) & (pv <= N_IDS - 1)
-    bit(~virt | ((tnp >= F(0)) & (tnp <= k.TS3_S)), "TN_PREV")
-    return fault
+    return evaluate(number_format(t.number_format).ops, GUARD, FAULT, Constants(t.consts), x)
 
 
 def step_batch(t: ThreeLevelTables, x: np.ndarray) -> np.ndarray:
-    """Run the step on every record of ``x`` (INPUT_DTYPE); return OUTPUT_DTYPE records."""
-    x = np.asarray(x)
-    if x.dtype != INPUT_DTYPE:
-        raise TypeError(f"input dtype must be {INPUT_DTYPE}")
-    with np.errstate(all="ignore"):
-        return _step(t, x)
+    """Run the step on every record of ``x`` (the input record); return output records."""
+    return run_batch(x, INPUT.bind(number_format(t.number_format)).dtype, lambda x: _step(t, x))
+
+
+class _Midpoint:
+    """Neutral-point current and charge of a vector's segments (spec, eq. (2) corrected, (8)-(11))."""
+
+    def __init__(self, o: Ops, t: ThreeLevelTables, k: Constants) -> None:
+        self.o, self.k = o, k
+        self.ka, self.kb, self.kc = o.array(t.io_a), o.array(t.io_b), o.array(t.io_c)
+
+    def io(self, s: np.ndarray, a: Any, b: Any, c: Any) -> Any:
+        """i_o = sum_x (1 - |S_x|) i_x of state s."""
+        o = self.o
+        r = o.add(o.mul(self.ka[s], a), o.mul(self.kb[s], b))
+        return o.add(r, o.mul(self.kc[s], c))
+
+    def parts(self, sq: np.ndarray, a: Any, b: Any, c: Any) -> tuple[Any, Any, Any]:
+        """(i_o(N), A = i_o(b) + i_o(c) + i_o(P), D = i_o(N) - i_o(P)) of sequences sq [N, b, c, P, ...]."""
+        o = self.o
+        o_n = self.io(sq[:, 0], a, b, c)
+        o_b = self.io(sq[:, 1], a, b, c)
+        o_c = self.io(sq[:, 2], a, b, c)
+        o_p = self.io(sq[:, 3], a, b, c)
+        sa = o.add(o_b, o_c)
+        sa = o.add(sa, o_p)
+        return o_n, sa, o.sub(o_n, o_p)
+
+    def charge(self, virt: np.ndarray, o_n: Any, sa: Any, d: Any, tn: Any) -> Any:
+        """Q over the period: virtual Ts/3 A + T_N D, basic Ts i_o(s)."""
+        o, k = self.o, self.k
+        q_v = o.mul(k.TS3_S, sa)
+        q_v = o.add(q_v, o.mul(tn, d))
+        q_b = o.mul(k.TS_S, o_n)
+        return o.where(virt, q_v, q_b)
 
 
 def _step(t: ThreeLevelTables, x: np.ndarray) -> np.ndarray:
-    k = _K(t)
+    nf = number_format(t.number_format)
+    o = nf.ops
+    k = Constants(t.consts)
     n = len(x)
-    out = np.zeros(n, OUTPUT_DTYPE)
+    out = OUTPUT.bind(nf).zeros(n)
     fault = guard(t, x)
     ok = fault == 0
-    zf = F(0)
-    ia = np.where(ok, x["ia_a"], zf)
-    ib = np.where(ok, x["ib_a"], zf)
-    th = np.where(ok, x["theta_e_rad"], zf)
-    om = np.where(ok, x["omega_e_rad_s"], zf)
-    uc1 = np.where(ok, x["uc1_v"], zf)
-    uc2 = np.where(ok, x["uc2_v"], zf)
-    tref = np.where(ok, x["torque_ref_nm"], zf)
-    pv = np.where(ok, x["prev_vector"], 0).astype(np.intp)
-    tnp = np.where(ok, x["t_n_prev_s"], zf)
+    # faulted lanes compute on zeros (their outputs are overwritten below)
+    zf = o.const(0.0)
+    inp = zero_faulted(o, ok, x, INPUT.fields, REAL)
+    ia, ib, th, om = inp["ia_a"], inp["ib_a"], inp["theta_e_rad"], inp["omega_e_rad_s"]
+    uc1, uc2, tref = inp["uc1_v"], inp["uc2_v"], inp["torque_ref_nm"]
+    pv, tnp = inp["prev_vector"], inp["t_n_prev_s"]
 
-    ka = np.array(t.io_a, F)
-    kb = np.array(t.io_b, F)
-    kc = np.array(t.io_c, F)
-    ux = np.array(t.ux, F)
-    uy = np.array(t.uy, F)
+    mid = _Midpoint(o, t, k)
+    ux = o.array(t.ux)
+    uy = o.array(t.uy)
     is_virt = np.array(t.is_virtual, bool)
     seq = np.array(t.seq, np.intp)
     end_state = np.array(t.end_state, np.intp)
+    model = DQ.resolve(k)
 
-    def io(s: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
-        # i_o = sum_x (1 - |S_x|) i_x  (spec, correcting eq. (2))
-        r = ka[s] * a + kb[s] * b
-        return r + kc[s] * c
-
-    def bases(i_d0: np.ndarray, i_q0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        # bd = i_d + Ts/Ls (w Ls i_q - Rs i_d);  bq = i_q - Ts/Ls (Rs i_q + w Ls i_d + w psi_f)
-        bd = om * k.LS_H
-        bd = bd * i_q0
-        bd = bd - k.RS_OHM * i_d0
-        bd = k.A_S * bd
-        bd = i_d0 + bd
-        bq = k.RS_OHM * i_q0
-        w = om * k.LS_H
-        w = w * i_d0
-        bq = bq + w
-        bq = bq + om * k.PSI_F_WB
-        bq = k.A_S * bq
-        bq = i_q0 - bq
-        return bd, bq
-
-    def advance(bd, bq, vc, vs, v):
-        ud = vc * ux[v] + vs * uy[v]
-        uq = vc * uy[v] - vs * ux[v]
-        return bd + k.A_S * ud, bq + k.A_S * uq
-
-    udc = uc1 + uc2
-    vo = uc1 - uc2
-    vo = vo * k.HALF
-    tk = om * k.TS_S
-    th1 = th + tk
-    th2 = th1 + tk
-    s0, c0 = sincos_f32(th)
-    s1, c1 = sincos_f32(th1)
-    s2, c2 = sincos_f32(th2)
+    udc = o.add(uc1, uc2)
+    vo = o.sub(uc1, uc2)
+    vo = o.mul(vo, k.HALF)
+    tk = o.mul(om, k.TS_S)
+    th1 = o.add(th, tk)
+    th2 = o.add(th1, tk)
+    s0, c0 = sincos(o, th)
+    s1, c1 = sincos(o, th1)
+    s2, c2 = sincos(o, th2)
     # Clarke, Park with theta(k)
-    tt = ib + ib
-    tt = ia + tt
-    i_beta = tt * k.INV_SQRT3
-    i_alpha = ia
-    i_d = i_alpha * c0 + i_beta * s0
-    i_q = i_beta * c0 - i_alpha * s0
-    ic = -(ia + ib)
+    i_alpha, i_beta = frames.clarke(o, ia, ib, k.INV_SQRT3)
+    i_d, i_q = frames.park(o, i_alpha, i_beta, s0, c0)
+    ic = frames.third_phase(o, ia, ib)
 
     # delay compensation: k -> k+1 under the applied vector
-    vc0 = udc * c0
-    vs0 = udc * s0
-    bd0, bq0 = bases(i_d, i_q)
-    i_d1, i_q1 = advance(bd0, bq0, vc0, vs0, pv)
-    pvv = is_virt[pv]
-    sq = seq[pv]
-    o_n = io(sq[:, 0], ia, ib, ic)
-    o_b = io(sq[:, 1], ia, ib, ic)
-    o_c = io(sq[:, 2], ia, ib, ic)
-    o_p = io(sq[:, 3], ia, ib, ic)
-    a = o_b + o_c
-    a = a + o_p
-    d = o_n - o_p
-    q_v = k.TS3_S * a
-    q_v = q_v + tnp * d
-    q_b = k.TS_S * o_n
-    q = np.where(pvv, q_v, q_b)
-    vo1 = vo + k.K_VO * q
+    vc0 = o.mul(udc, c0)
+    vs0 = o.mul(udc, s0)
+    bd0, bq0 = dq.bases(o, model, om, i_d, i_q)
+    i_d1, i_q1 = dq.advance(o, model, bd0, bq0, vc0, vs0, ux[pv], uy[pv])
+    o_n, sa, d = mid.parts(seq[pv], ia, ib, ic)
+    q = mid.charge(is_virt[pv], o_n, sa, d, tnp)
+    vo1 = o.add(vo, o.mul(k.K_VO, q))
 
-    pd1 = k.LS_H * i_d1
-    pd1 = pd1 + k.PSI_F_WB
-    pq1 = k.LS_H * i_q1
-    te = k.TE_PSI * i_q1
-    mag = np.sqrt(pd1 * pd1 + pq1 * pq1)
+    pd1, pq1 = dq.flux(o, model, i_d1, i_q1)
+    te = o.mul(k.TE_PSI, i_q1)
+    mag = dq.magnitude(o, pd1, pq1)
     # MTPA flux reference
-    iqr = tref * k.INV_TE_PSI
-    pqr = k.LS_H * iqr
-    psir = np.sqrt(k.PSI_F_SQ + pqr * pqr)
+    iqr = o.mul(tref, k.INV_TE_PSI)
+    pqr = o.mul(k.LS_H, iqr)
+    psir = o.sqrt(o.add(k.PSI_F_SQ, o.mul(pqr, pqr)))
     # deadbeat reference voltage (eq. (12)-(15))
-    p1a = pd1 * c1 - pq1 * s1
-    p1b = pd1 * s1 + pq1 * c1
-    i1a = i_d1 * c1 - i_q1 * s1
-    i1b = i_d1 * s1 + i_q1 * c1
-    pra = k.PSI_F_WB * c2 - pqr * s2
-    prb = k.PSI_F_WB * s2 + pqr * c2
-    ua = pra - p1a
-    ua = ua * k.INV_TS
-    ua = ua + k.RS_OHM * i1a
-    ub = prb - p1b
-    ub = ub * k.INV_TS
-    ub = ub + k.RS_OHM * i1b
-    sec = sector12(ua, ub, k).astype(np.intp)
+    p1a, p1b = frames.inv_park(o, pd1, pq1, s1, c1)
+    i1a, i1b = frames.inv_park(o, i_d1, i_q1, s1, c1)
+    pra, prb = frames.inv_park(o, k.PSI_F_WB, pqr, s2, c2)
+    ua = o.sub(pra, p1a)
+    ua = o.mul(ua, k.INV_TS)
+    ua = o.add(ua, o.mul(k.RS_OHM, i1a))
+    ub = o.sub(prb, p1b)
+    ub = o.mul(ub, k.INV_TS)
+    ub = o.add(ub, o.mul(k.RS_OHM, i1b))
+    sec = sector12(o, ua, ub, k.TAN30, k.TAN60).astype(np.intp)
     # phase currents at k+1 (inverse Clarke)
-    ia1 = i1a
-    ib1 = k.SQRT3_2 * i1b - k.HALF * i1a
-    ic1 = -(ia1 + ib1)
-    vc1 = udc * c1
-    vs1 = udc * s1
-    bd1, bq1 = bases(i_d1, i_q1)
+    ia1, ib1, ic1 = frames.inv_clarke(o, i1a, i1b, k.SQRT3_2, k.HALF)
+    vc1 = o.mul(udc, c1)
+    vs1 = o.mul(udc, s1)
+    bd1, bq1 = dq.bases(o, model, om, i_d1, i_q1)
 
     if t.n_sectors == 1:
         row = np.zeros(n, np.intp)
@@ -227,10 +181,10 @@ def _step(t: ThreeLevelTables, x: np.ndarray) -> np.ndarray:
     row_n = np.array(t.row_n, np.intp)[row]
     group_n = np.array(t.group_n, np.intp)
 
-    best = np.zeros(n, F)
+    best = o.zeros(n)
     best_v = np.zeros(n, np.intp)
-    best_tn = np.zeros(n, F)
-    costs = np.zeros((n, N_MAX_EVAL), F)
+    best_tn = o.zeros(n)
+    costs = o.zeros((n, N_MAX_EVAL))
     cand = np.zeros((n, N_MAX_EVAL), np.uint16)
     n_members = np.zeros(n, np.intp)
     for j in range(t.max_groups):
@@ -238,67 +192,57 @@ def _step(t: ThreeLevelTables, x: np.ndarray) -> np.ndarray:
         g = rows[row, j]
         gn = group_n[g]
         n_members += np.where(active, gn, 0)
-        m_av = np.zeros(n, F)
+        m_av = o.zeros(n)
         m_v = np.zeros(n, np.intp)
-        m_tn = np.zeros(n, F)
+        m_tn = o.zeros(n)
         for mi in range(t.max_members):
             m_act = mi < gn
             v = groups[g, mi]
-            sq = seq[v]
-            o_n = io(sq[:, 0], ia1, ib1, ic1)
-            o_b = io(sq[:, 1], ia1, ib1, ic1)
-            o_c = io(sq[:, 2], ia1, ib1, ic1)
-            o_p = io(sq[:, 3], ia1, ib1, ic1)
-            a = o_b + o_c
-            a = a + o_p
-            d = o_n - o_p
-            num = vo1 * k.TWO_C
-            num = num + k.TS3_S * a
-            num = -num
-            tn = np.where(d != F(0), num / d, k.TN_MIN_S)
-            tn = np.where(tn < k.TN_MIN_S, k.TN_MIN_S, tn)
-            tn = np.where(tn > k.TS3_S, k.TS3_S, tn)
-            q_v = k.TS3_S * a
-            q_v = q_v + tn * d
-            q_b = k.TS_S * o_n
+            o_n, sa, d = mid.parts(seq[v], ia1, ib1, ic1)
+            # neutral-point deadbeat T_N = -(2C V_o(k+1) + Ts/3 A)/D, clamped to [T_N_min, Ts/3]
+            num = o.mul(vo1, k.TWO_C)
+            num = o.add(num, o.mul(k.TS3_S, sa))
+            num = o.neg(num)
+            tn = o.where(o.ne(d, zf), o.div(num, d), k.TN_MIN_S)
+            tn = o.where(o.lt(tn, k.TN_MIN_S), k.TN_MIN_S, tn)
+            tn = o.where(o.gt(tn, k.TS3_S), k.TS3_S, tn)
             virt = is_virt[v]
-            q = np.where(virt, q_v, q_b)
-            tn = np.where(virt, tn, F(0))
-            vo2 = vo1 + k.K_VO * q
-            av = np.abs(vo2)
-            take = m_act & ((mi == 0) | (av < m_av))
-            m_av = np.where(take, av, m_av)
+            q = mid.charge(virt, o_n, sa, d, tn)
+            tn = o.where(virt, tn, zf)
+            vo2 = o.add(vo1, o.mul(k.K_VO, q))
+            av = o.abs(vo2)
+            take = m_act & ((mi == 0) | o.lt(av, m_av))
+            m_av = o.where(take, av, m_av)
             m_v = np.where(take, v, m_v)
-            m_tn = np.where(take, tn, m_tn)
-        id2, iq2 = advance(bd1, bq1, vc1, vs1, m_v)
-        pd = k.LS_H * id2
-        pd = pd + k.PSI_F_WB
-        pq = k.LS_H * iq2
-        te2 = k.TE_PSI * iq2
-        m2 = np.sqrt(pd * pd + pq * pq)
-        e_t = tref - te2
-        e_t = np.abs(e_t)
-        e_p = psir - m2
-        e_p = np.abs(e_p)
-        e_p = k.LAMBDA_PSI * e_p
-        e_v = k.LAMBDA_VO * m_av
-        gc = e_t + e_p
-        gc = gc + e_v
-        take = active & ((j == 0) | (gc < best))
-        best = np.where(take, gc, best)
+            m_tn = o.where(take, tn, m_tn)
+        id2, iq2 = dq.advance(o, model, bd1, bq1, vc1, vs1, ux[m_v], uy[m_v])
+        pd, pq = dq.flux(o, model, id2, iq2)
+        te2 = o.mul(k.TE_PSI, iq2)
+        m2 = dq.magnitude(o, pd, pq)
+        # cost eq. (7): g = |T* - Te| + lambda1 |psi* - psi_s| + lambda2 |V_o(k+2)|
+        e_t = o.sub(tref, te2)
+        e_t = o.abs(e_t)
+        e_p = o.sub(psir, m2)
+        e_p = o.abs(e_p)
+        e_p = o.mul(k.LAMBDA_PSI, e_p)
+        e_v = o.mul(k.LAMBDA_VO, m_av)
+        gc = o.add(e_t, e_p)
+        gc = o.add(gc, e_v)
+        take = active & ((j == 0) | o.lt(gc, best))
+        best = o.where(take, gc, best)
         best_v = np.where(take, m_v, best_v)
-        best_tn = np.where(take, m_tn, best_tn)
-        costs[:, j] = np.where(active, gc, F(0))
+        best_tn = o.where(take, m_tn, best_tn)
+        costs[:, j] = o.where(active, gc, zf)
         cand[:, j] = np.where(active, m_v, 0)
 
     bvirt = is_virt[best_v]
     states = np.where(bvirt[:, None], seq[best_v], best_v[:, None]).astype(np.uint16)
-    half_tn = best_tn * k.HALF
-    tp = k.TS3_S - best_tn
-    seg = np.zeros((n, N_SEGMENTS), F)
-    z = np.zeros(n, F)
+    half_tn = o.mul(best_tn, k.HALF)
+    tp = o.sub(k.TS3_S, best_tn)
+    seg = o.zeros((n, N_SEGMENTS))
+    z = o.zeros(n)
     for i, val in enumerate((half_tn, k.TS6_S, k.TS6_S, tp, k.TS6_S, k.TS6_S, half_tn)):
-        seg[:, i] = np.where(bvirt, val, k.TS_S if i == 0 else z)
+        seg[:, i] = o.where(bvirt, val, k.TS_S if i == 0 else z)
 
     out["te_est_nm"] = te
     out["psi_est_wb"] = mag
@@ -320,7 +264,7 @@ def _step(t: ThreeLevelTables, x: np.ndarray) -> np.ndarray:
     out["cand"] = cand
     bad = ~ok
     if bad.any():
-        safe = np.zeros(1, OUTPUT_DTYPE)
+        safe = OUTPUT.bind(nf).zeros(1)
         safe["states"] = SAFE_STATE
         safe["vector"] = SAFE_STATE
         safe["seg_s"][0, 0] = k.TS_S

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...kernels.guard import AllAtLeast, AllAtMost, Check, IndexAtMost, fault_bits, motor_checks
 from ...numfmt.float32 import FLOAT32
 from ...records import MOTOR_INPUT_FIELDS, REAL, U16, Field, Record
 
@@ -39,16 +40,18 @@ OUTPUT_FIELDS: tuple[Field, ...] = (
     Field("cand", U16, N_VECTORS, "candidate vector j in evaluation order; 0 beyond n_eval"),
 )
 
-#: Fault bits of the input guard (numerics.md "Inputs are guarded").
-FAULT_BITS: tuple[tuple[str, int, str], ...] = (
-    ("CURRENT", 1, "|i_a|, |i_b| or |i_c| above i_trip_a, or not finite"),
-    ("UDC_LOW", 2, "DC link below udc_min_v, or not finite"),
-    ("UDC_HIGH", 4, "DC link above udc_max_v, or not finite"),
-    ("ANGLE", 8, "|theta_e| above the angle guard, or not finite"),
-    ("SPEED", 16, "|omega_e| above the speed guard, or not finite"),
-    ("TORQUE_REF", 32, "|T*| above the torque-reference guard, or not finite"),
-    ("STATE", 64, "prev_sw is not a switching state 0..7"),
+#: The input guard as data (numerics.md "Inputs are guarded"), evaluated by codegen.kernels.guard.
+GUARD: tuple[Check, ...] = motor_checks() + (
+    AllAtLeast("UDC_LOW", ("udc_v",), "UDC_MIN_V"),
+    AllAtMost("UDC_HIGH", ("udc_v",), "UDC_MAX_V"),
+    IndexAtMost("STATE", "prev_sw", 7),
 )
+#: Fault bits of the input guard: (name, bit, meaning).
+FAULT_BITS: tuple[tuple[str, int, str], ...] = fault_bits({
+    "UDC_LOW": "DC link below udc_min_v, or not finite",
+    "UDC_HIGH": "DC link above udc_max_v, or not finite",
+    "STATE": "prev_sw is not a switching state 0..7",
+})
 FAULT = {name: bit for name, bit, _ in FAULT_BITS}
 
 #: The step's records (one definition; every layout derives from these).

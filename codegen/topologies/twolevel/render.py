@@ -1,19 +1,10 @@
 """Template context of the two-level step: values to print, already derived."""
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 from codegen.model import Model
-from codegen.numfmt.float32 import FLOAT32
-from codegen.render import base_context, render_files
-from codegen.topologies.twolevel.derive import TwoLevelTables
-from codegen.topologies.twolevel.records import FAULT_BITS, INPUT, N_VECTORS, OUTPUT
-
-
-@dataclass(frozen=True)
-class _Row:
-    cells: tuple[int, ...]
-    label: str
+from codegen.render import TableRow, render_step, render_step_cdef, step_context
+from codegen.topologies.twolevel.derive import DQ, TwoLevelTables
+from codegen.topologies.twolevel.records import FAULT_BITS, GUARD, INPUT, N_VECTORS, OUTPUT
 
 
 def _row_labels(t: TwoLevelTables) -> list[str]:
@@ -28,42 +19,38 @@ def _row_labels(t: TwoLevelTables) -> list[str]:
 
 def two_level_context(model: Model, t: TwoLevelTables, target: str) -> dict:
     """Template context: values to print, already derived."""
-    labels = _row_labels(t)
     rows = [
-        _Row(tuple(r) + (0,) * (N_VECTORS - len(r)), f"{lab}: " + " ".join(f"V{v}" for v in r))
-        for r, lab in zip(t.rows, labels)
+        TableRow(tuple(r) + (0,) * (N_VECTORS - len(r)), f"{lab}: " + " ".join(f"V{v}" for v in r))
+        for r, lab in zip(t.rows, _row_labels(t))
     ]
-    nf = FLOAT32
-    return {
-        **base_context(model, target),
-        "strategy": t.strategy,
-        "predictor": t.predictor,
-        "delay_compensation": t.delay_compensation,
-        "consts": t.consts,
-        "ux": t.ux,
-        "uy": t.uy,
-        "vec_to_sw": t.vec_to_sw,
-        "sw_to_vec": t.sw_to_vec,
-        "zero_sw": t.zero_sw,
-        "n_sectors": t.n_sectors,
-        "uses_threshold": t.uses_threshold,
-        "rows": t.rows,
-        "rows_padded": rows,
-        "row_len": t.row_len,
-        "n_vectors": N_VECTORS,
-        "faults": FAULT_BITS,
-        "input_fields": INPUT.bind(nf).members,
-        "output_fields": OUTPUT.bind(nf).members,
-    }
+    return step_context(
+        model, target, (INPUT, OUTPUT), FAULT_BITS,
+        topology_macro="MPC_TOPOLOGY_TWO_LEVEL",
+        guard=GUARD,
+        dq=DQ,
+        strategy=t.strategy,
+        predictor=t.predictor,
+        delay_compensation=t.delay_compensation,
+        consts=t.consts,
+        ux=t.ux,
+        uy=t.uy,
+        vec_to_sw=t.vec_to_sw,
+        sw_to_vec=t.sw_to_vec,
+        zero_sw=t.zero_sw,
+        n_sectors=t.n_sectors,
+        uses_threshold=t.uses_threshold,
+        rows=t.rows,
+        rows_padded=rows,
+        row_len=t.row_len,
+        n_vectors=N_VECTORS,
+    )
 
 
 def render_two_level(model: Model, t: TwoLevelTables, target: str) -> dict[str, str]:
     """File name -> text of the generated controller for ``target``."""
-    p = model.prefix
-    return render_files({f"{p}_mpc.h": "twolevel/mpc.h.j2", f"{p}_mpc.c": "twolevel/mpc.c.j2",
-                         "mpc_binding.h": "twolevel/binding.h.j2"}, two_level_context(model, t, target))
+    return render_step(model, "twolevel", two_level_context(model, t, target))
 
 
 def render_cdef(model: Model, t: TwoLevelTables) -> str:
     """cffi declarations (no preprocessor lines) of the host build."""
-    return render_files({"cdef": "twolevel/cdef.h.j2"}, two_level_context(model, t, "host"))["cdef"]
+    return render_step_cdef(two_level_context(model, t, "host"))

@@ -23,10 +23,13 @@ from pathlib import Path
 import numpy as np
 
 from codegen.errors import ConfigError
+from codegen.kernels.consts import Constants
+from codegen.kernels.sector import sector12
 from codegen.model import Model
+from codegen.numfmt import number_format
 from codegen.topologies.twolevel import tables_file
 from codegen.topologies.twolevel.derive import SwitchTable, TwoLevelTables, derive_two_level
-from codegen.topologies.twolevel.reference import _K, sector12, step_batch
+from codegen.topologies.twolevel.reference import step_batch
 from codegen.topologies.twolevel.utilisation import count_utilisation, derive_table, published_tables
 
 #: Fewest active-vector choices in a cell for its derived set to be used.
@@ -55,11 +58,12 @@ def utilisation_counts(model: Model, progress: Callable[[float], None] | None = 
     trace = run_closed_loop(lib.ffi, lib.lib, train, progress=progress)
     states = controller_inputs(trace, train)
     out = step_batch(t, states)
-    k = _K(t)
+    k = Constants(t.consts)
+    ops = number_format(t.number_format).ops
     d_t = states["torque_ref_nm"] - out["te_est_nm"]
     d_psi = k.PSI_REF_WB - out["psi_est_wb"]
     mask = (np.abs(d_t) > k.EPS_T_NM) & (out["fault"] == 0)
-    sec12 = sector12(out["psi_alpha_wb"], out["psi_beta_wb"], k).astype(np.intp)
+    sec12 = sector12(ops, out["psi_alpha_wb"], out["psi_beta_wb"], k.TAN30, k.TAN60).astype(np.intp)
     vec = out["vector"].astype(np.intp)
     c2 = np.where(d_t > 0, 0, 1)
     c4 = np.where(d_t > 0, 0, 2) + np.where(d_psi > 0, 0, 1)

@@ -1,0 +1,33 @@
+"""Batch plumbing every Python reference shares: input check, error state, faulted lanes.
+
+A reference runs vectorised over a batch of input records; lanes whose guard
+tripped compute on zeros (their outputs are replaced by the safe decision),
+so no lane's garbage can raise or leak into another.
+"""
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from codegen.numfmt import Ops
+
+__all__ = ["run_batch", "zero_faulted"]
+
+
+def run_batch(x: Any, dtype: np.dtype, step: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
+    """``step(x)`` with floating-point warnings off, after checking ``x`` is a batch of ``dtype``."""
+    x = np.asarray(x)
+    if x.dtype != dtype:
+        raise TypeError(f"input dtype must be {dtype}")
+    with np.errstate(all="ignore"):
+        return step(x)
+
+
+def zero_faulted(ops: Ops, ok: np.ndarray, x: np.ndarray, fields: Any, real_kind: str) -> dict[str, np.ndarray]:
+    """Each input field with the faulted lanes (``~ok``) zeroed: real fields in the format,
+    the others (indices) as ``np.intp``.  ``fields``: the record's fields (name, kind)."""
+    zero = ops.const(0.0)
+    return {f.name: ops.where(ok, x[f.name], zero) if f.kind == real_kind
+            else np.where(ok, x[f.name], 0).astype(np.intp) for f in fields}

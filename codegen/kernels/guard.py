@@ -1,0 +1,182 @@
+"""The input guard as data (numerics.md "Inputs are guarded").
+
+A topology describes its guard as a tuple of checks; :func:`evaluate` is the
+Python evaluation, ``templates/common/kernels.j2`` ``guard_fn`` the C one.
+Every check is written so that a NaN fails it (comparisons are false on NaN)
+and sets the check's fault bit.  Limits are constant names of the step
+(``Const``), a lower bound of ``None`` is zero.
+
+Fault bits: :data:`COMMON_FAULTS` are the bits every topology has, in bit
+order (1, 2, 4, ...); a topology appends its own after them.
+"""
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from codegen.kernels.consts import Constants
+from codegen.kernels.frames import third_phase
+from codegen.numfmt import Ops
+
+__all__ = ["COMMON_FAULTS", "COMMON_FAULT_DOCS", "PhaseCurrents", "AllAtLeast", "AllAtMost", "AbsAtMost",
+           "IndexAtMost", "RealInRangeWhen", "Check", "fault_bits", "motor_checks", "evaluate"]
+
+#: fault bits every topology's guard has, in bit order
+COMMON_FAULTS: tuple[str, ...] = ("CURRENT", "UDC_LOW", "UDC_HIGH", "ANGLE", "SPEED", "TORQUE_REF", "STATE")
+
+#: meaning of the common bits whose checks are the same in every topology
+COMMON_FAULT_DOCS: dict[str, str] = {
+    "CURRENT": "|i_a|, |i_b| or |i_c| above i_trip_a, or not finite",
+    "ANGLE": "|theta_e| above the angle guard, or not finite",
+    "SPEED": "|omega_e| above the speed guard, or not finite",
+    "TORQUE_REF": "|T*| above the torque-reference guard, or not finite",
+}
+
+
+@dataclass(frozen=True)
+class PhaseCurrents:
+    """|i_a|, |i_b|, |i_c| <= limit with i_c = -(i_a + i_b)."""
+
+    fault: str
+    ia: str
+    ib: str
+    limit: str
+    kind: str = "phase_currents"
+
+    @property
+    def text(self) -> str:
+        """The check as a formula (generated comments)."""
+        return f"|{self.ia}|, |{self.ib}|, |i_c| <= {self.limit}, i_c = -({self.ia} + {self.ib})"
+
+
+@dataclass(frozen=True)
+class AllAtLeast:
+    """Every field >= limit."""
+
+    fault: str
+    fields: tuple[str, ...]
+    limit: str
+    kind: str = "all_at_least"
+
+    @property
+    def text(self) -> str:
+        """The check as a formula (generated comments)."""
+        return f"{', '.join(self.fields)} >= {self.limit}"
+
+
+@dataclass(frozen=True)
+class AllAtMost:
+    """Every field <= limit."""
+
+    fault: str
+    fields: tuple[str, ...]
+    limit: str
+    kind: str = "all_at_most"
+
+    @property
+    def text(self) -> str:
+        """The check as a formula (generated comments)."""
+        return f"{', '.join(self.fields)} <= {self.limit}"
+
+
+@dataclass(frozen=True)
+class AbsAtMost:
+    """|field| <= limit."""
+
+    fault: str
+    field: str
+    limit: str
+    kind: str = "abs_at_most"
+
+    @property
+    def text(self) -> str:
+        """The check as a formula (generated comments)."""
+        return f"|{self.field}| <= {self.limit}"
+
+
+@dataclass(frozen=True)
+class IndexAtMost:
+    """Integer field <= max."""
+
+    fault: str
+    field: str
+    max: int
+    kind: str = "index_at_most"
+
+    @property
+    def text(self) -> str:
+        """The check as a formula (generated comments)."""
+        return f"{self.field} <= {self.max}"
+
+
+@dataclass(frozen=True)
+class RealInRangeWhen:
+    """Real field in [lo, hi] whenever integer field ``index`` is in [first, last] (lo None: zero)."""
+
+    fault: str
+    field: str
+    lo: str | None
+    hi: str
+    index: str
+    first: int
+    last: int
+    kind: str = "real_in_range_when"
+
+    @property
+    def text(self) -> str:
+        """The check as a formula (generated comments)."""
+        return f"{self.field} in [{self.lo or 0}, {self.hi}] when {self.index} in [{self.first}, {self.last}]"
+
+
+Check = PhaseCurrents | AllAtLeast | AllAtMost | AbsAtMost | IndexAtMost | RealInRangeWhen
+
+
+def fault_bits(docs: Mapping[str, str], extra: tuple[str, ...] = ()) -> tuple[tuple[str, int, str], ...]:
+    """(name, bit, meaning) of the common bits then ``extra``; ``docs`` adds or overrides meanings."""
+    names = COMMON_FAULTS + extra
+    meaning = {**COMMON_FAULT_DOCS, **docs}
+    return tuple((n, 1 << i, meaning[n]) for i, n in enumerate(names))
+
+
+def motor_checks() -> tuple[Check, ...]:
+    """The checks of the motor measurements every step takes (``records.MOTOR_INPUT_FIELDS``)
+    and of the torque reference: CURRENT, ANGLE, SPEED, TORQUE_REF."""
+    return (
+        PhaseCurrents("CURRENT", "ia_a", "ib_a", "I_TRIP_A"),
+        AbsAtMost("ANGLE", "theta_e_rad", "ANGLE_GUARD_RAD"),
+        AbsAtMost("SPEED", "omega_e_rad_s", "OMEGA_GUARD_RAD_S"),
+        AbsAtMost("TORQUE_REF", "torque_ref_nm", "TORQUE_REF_GUARD_NM"),
+    )
+
+
+def _ok(ops: Ops, c: Check, k: Constants, x: np.ndarray) -> np.ndarray:
+    """Per record: does check ``c`` pass."""
+    if isinstance(c, PhaseCurrents):
+        ia, ib, lim = x[c.ia], x[c.ib], k[c.limit]
+        ic = third_phase(ops, ia, ib)
+        return ops.le(ops.abs(ia), lim) & ops.le(ops.abs(ib), lim) & ops.le(ops.abs(ic), lim)
+    if isinstance(c, AllAtLeast | AllAtMost):
+        cmp = ops.ge if isinstance(c, AllAtLeast) else ops.le
+        ok = np.ones(len(x), bool)
+        for f in c.fields:
+            ok &= cmp(x[f], k[c.limit])
+        return ok
+    if isinstance(c, AbsAtMost):
+        return ops.le(ops.abs(x[c.field]), k[c.limit])
+    if isinstance(c, IndexAtMost):
+        return x[c.field] <= c.max
+    idx, v = x[c.index], x[c.field]
+    lo = ops.const(0.0) if c.lo is None else k[c.lo]
+    applies = (idx >= c.first) & (idx <= c.last)
+    return ~applies | (ops.ge(v, lo) & ops.le(v, k[c.hi]))
+
+
+def evaluate(ops: Ops, checks: tuple[Check, ...], bits: Mapping[str, int], k: Constants,
+             x: np.ndarray) -> np.ndarray:
+    """Fault bits (uint16) per input record: the OR of the bits of the failed checks."""
+    fault = np.zeros(len(x), np.uint16)
+    for c in checks:
+        fault |= np.where(_ok(ops, c, k, x), 0, bits[c.fault]).astype(np.uint16)
+    return fault

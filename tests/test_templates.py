@@ -1,0 +1,49 @@
+"""The topologies' templates share their common code through macros, not copies.
+
+Two step templates (or header templates) that repeat a run of 6 identical
+non-blank lines (whitespace-normalised) should call a shared macro in
+templates/common instead.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+TEMPLATES = Path(__file__).resolve().parent.parent / "templates"
+TOPOLOGIES = ("twolevel", "ttype")
+RUN = 6
+
+
+def _lines(path: Path) -> list[str]:
+    """Non-blank lines with whitespace runs collapsed."""
+    return [" ".join(line.split()) for line in path.read_text().splitlines() if line.strip()]
+
+
+def shared_runs(a: list[str], b: list[str], n: int = RUN) -> list[tuple[str, ...]]:
+    """Every run of ``n`` consecutive lines of ``a`` that also stands in ``b``."""
+    runs_b = {tuple(b[i:i + n]) for i in range(len(b) - n + 1)}
+    return [tuple(a[i:i + n]) for i in range(len(a) - n + 1) if tuple(a[i:i + n]) in runs_b]
+
+
+def test_shared_runs_finds_a_copy() -> None:
+    block = [f"line {i}" for i in range(RUN)]
+    assert shared_runs(["x", *block, "y"], ["z", *block]) == [tuple(block)]
+    assert shared_runs(block[:-1], block) == []
+
+
+@pytest.mark.parametrize("name", sorted({p.name for t in TOPOLOGIES for p in (TEMPLATES / t).glob("*.j2")}))
+def test_topology_templates_share_no_block(name: str) -> None:
+    paths = [TEMPLATES / t / name for t in TOPOLOGIES if (TEMPLATES / t / name).exists()]
+    if len(paths) < 2:
+        pytest.skip(f"{name}: only one topology has it")
+    runs = shared_runs(_lines(paths[0]), _lines(paths[1]))
+    assert not runs, f"{name}: move this block into templates/common:\n" + "\n".join(runs[0])
+
+
+def test_number_format_spelled_through_macros() -> None:
+    """No C float spelling (type, libm call, literal filter) in the step templates or shared kernels."""
+    for path in [*(TEMPLATES / t / "mpc.c.j2" for t in TOPOLOGIES), TEMPLATES / "common" / "kernels.j2"]:
+        text = path.read_text()
+        for word in ("float ", "sqrtf(", "fabsf(", "c_float", "0.0f", "ctype =="):
+            assert word not in text, f"{path.name}: {word!r} belongs in templates/numfmt/<format>.j2"
