@@ -22,6 +22,7 @@ Everything is vectorised numpy; nothing loops over samples in Python.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -43,6 +44,10 @@ __all__ = [
     "fundamental_hz",
     "ripple_summary",
     "sample_time",
+    "RunWindows",
+    "run_windows",
+    "thd_ia",
+    "steady_ripples",
 ]
 
 # Tolerance, in samples / periods, for mapping times onto the sample grid.
@@ -254,7 +259,7 @@ def cal_ave(n_eval: Any) -> float:
 
 
 # ---------------------------------------------------------------------------
-# all two-level metrics of one run
+# pieces of every topology's metric set
 # ---------------------------------------------------------------------------
 def thd_window(trace: Any, model: Model, window_s: float = 0.2) -> tuple[float, float] | None:
     """The last steady window whose speed reference is nonzero (None if there is none)."""
@@ -288,3 +293,71 @@ def ripple_summary(trace: Any, psi_ref: Any, run_mask: Any, rip_mask: Any) -> di
         "psi_rip_std": p_stats["std"],
         "psi_rip_pp": p_stats["pp"],
     }
+
+
+@dataclass(frozen=True)
+class RunWindows:
+    """Where one run's metrics are taken (see :func:`run_windows`)."""
+
+    windows: list[tuple[float, float]]  # the steady windows
+    sl: slice  # the whole run, or stats_window
+    run_mask: np.ndarray | None  # None: the whole run
+    run_desc: dict[str, Any]
+    rip_mask: np.ndarray  # the steady windows, or stats_window
+    rip_desc: dict[str, Any]
+
+
+def run_windows(trace: Any, model: Model, stats_window: tuple[float, float] | None, window_s: float,
+                whole_run: str) -> RunWindows:
+    """The windows of a topology's metric set, described for the result's ``window`` entry.
+
+    RMSE-type metrics over the whole run (described as ``whole_run``) or
+    over ``stats_window``; std/pp ripples over the steady windows (last
+    ``window_s`` of each constant-reference segment) or ``stats_window``.
+    """
+    dt, n = trace.dt_s, trace.n
+    windows = steady_windows(model, window_s)
+    if stats_window is None:
+        rip_mask = window_mask(n, dt, windows)
+        return RunWindows(windows, slice(0, n), None,
+                          {"t0_s": 0.0, "t1_s": sample_time(n, dt), "n_samples": n, "description": whole_run},
+                          rip_mask, {
+                              "windows_s": [[a, b] for a, b in windows],
+                              "n_samples": int(np.count_nonzero(rip_mask)),
+                              "description": f"steady windows: last {window_s:g} s of each constant-reference segment",
+                          })
+    sl = window_slice(dt, stats_window[0], stats_window[1], n)
+    run_mask = np.zeros(n, dtype=bool)
+    run_mask[sl] = True
+    run_desc = {"t0_s": sample_time(sl.start, dt), "t1_s": sample_time(sl.stop, dt),
+                "n_samples": sl.stop - sl.start, "description": "window given by the caller"}
+    return RunWindows(windows, sl, run_mask, run_desc, run_mask, dict(run_desc))
+
+
+def thd_ia(trace: Any, model: Model, tw: tuple[float, float] | None, f_max_hz: float,
+           where: str) -> tuple[float, dict[str, Any]]:
+    """THD of i_a over the THD window ``tw`` (NaN and the reason when there is none).
+
+    ``where`` starts the description (e.g. "i_a over").
+    """
+    if tw is None:
+        return math.nan, {"description": "no steady window with a nonzero speed reference"}
+    try:
+        value, info = thd(trace.ia_a, trace.dt_s, tw[0], tw[1], fundamental_hz(trace, model, *tw), f_max_hz)
+    except ValueError as exc:
+        return math.nan, {"description": f"THD not computed: {exc}", "window_s": list(tw)}
+    info["description"] = (f"{where} [{tw[0]:g}, {tw[1]:g}) s, {info['n_periods']} fundamental periods, "
+                           f"harmonics {info['harmonics'][0]}..{info['harmonics'][1]}")
+    return value, info
+
+
+def steady_ripples(trace: Any, windows: list[tuple[float, float]], psi_ref: Any) -> list[dict[str, Any]]:
+    """Torque and flux ripple statistics of each steady window (the result's ``steady`` list)."""
+    rows = []
+    for a, b in windows:
+        m = window_mask(trace.n, trace.dt_s, (a, b))
+        ts = ripple_stats(trace.te_nm, trace.torque_ref_nm, m)
+        ps = ripple_stats(trace.psi_wb, psi_ref, m)
+        rows.append({"t0_s": a, "t1_s": b, "T_rip_RMSE": ts["rmse"], "T_rip_std": ts["std"], "T_rip_pp": ts["pp"],
+                     "psi_rip_RMSE": ps["rmse"], "psi_rip_std": ps["std"], "psi_rip_pp": ps["pp"]})
+    return rows

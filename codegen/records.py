@@ -26,12 +26,26 @@ import numpy as np
 
 from .numfmt import NumberFormat
 
-__all__ = ["REAL", "U16", "Field", "Record", "RecordLayout", "CMember", "Value"]
+__all__ = ["REAL", "U16", "F64", "F32", "I32", "I64", "Field", "Record", "RecordLayout", "CMember", "Value"]
 
 #: a real value, stored as the number format says (float32, fixed point)
 REAL = "real"
 #: an unsigned 16-bit integer (decisions, indices, counts, fault bits)
 U16 = "u16"
+#: fixed-width kinds that do not depend on the number format (host simulator records)
+F64 = "f64"  # IEEE double
+F32 = "f32"  # IEEE single
+I32 = "i32"  # signed 32-bit integer
+I64 = "i64"  # signed 64-bit integer
+
+#: numpy dtype, C type and C zero literal of every fixed-width kind
+_FIXED: dict[str, tuple[np.dtype, str, str]] = {
+    U16: (np.dtype(np.uint16), "uint16_t", "0u"),
+    F64: (np.dtype(np.float64), "double", "0.0"),
+    F32: (np.dtype(np.float32), "float", "0.0f"),
+    I32: (np.dtype(np.int32), "int32_t", "0"),
+    I64: (np.dtype(np.int64), "int64_t", "0"),
+}
 
 
 @dataclass(frozen=True)
@@ -39,7 +53,7 @@ class Field:
     """One record member: name (with its unit), kind, array length (1 = scalar), meaning."""
 
     name: str
-    kind: str  # REAL | U16
+    kind: str  # REAL | U16 | F64 | F32 | I32 | I64
     length: int
     doc: str
 
@@ -84,9 +98,6 @@ class Value:
     read: str  # C expression with REC for the record pointer
 
 
-_U16_NP = np.dtype(np.uint16)
-
-
 class RecordLayout:
     """A record bound to a number format: numpy dtypes, C members, bytes, hash."""
 
@@ -100,11 +111,11 @@ class RecordLayout:
 
     def np_type(self, f: Field) -> np.dtype:
         """numpy scalar dtype of field ``f``."""
-        return self.nf.real_dtype if f.kind == REAL else _U16_NP
+        return self.nf.real_dtype if f.kind == REAL else _FIXED[f.kind][0]
 
     def c_type(self, f: Field) -> str:
         """C type of field ``f``."""
-        return self.nf.c_type if f.kind == REAL else "uint16_t"
+        return self.nf.c_type if f.kind == REAL else _FIXED[f.kind][1]
 
     @cached_property
     def dtype(self) -> np.dtype:
@@ -124,7 +135,7 @@ class RecordLayout:
     def members(self) -> tuple[CMember, ...]:
         """C struct members in field order."""
         return tuple(CMember(self.c_type(f), f.name, f.length, f.doc, f.kind,
-                             self.nf.literal(self.nf.const(0.0)) if f.kind == REAL else "0u")
+                             self.nf.literal(self.nf.const(0.0)) if f.kind == REAL else _FIXED[f.kind][2])
                      for f in self.fields)
 
     @cached_property

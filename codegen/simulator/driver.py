@@ -2,33 +2,31 @@
 
 The whole period loop of a topology (plant sampling, speed PI, controller
 step, RK4 plant integration) runs in C: the topology's ``csrc/`` sources,
-the shared dq model and speed PI in ``csrc/`` here, and the generated
-controller step, compiled by the host build into one cffi library.  This
-module prepares the scenario arrays, fills the parameters every topology's
-simulator shares, and calls ``<api>_run`` once per chunk of periods (so
-progress can be reported), carrying the C state across chunks so a chunked
-run equals one long run bit for bit.
+the shared dq model, RK4, speed PI and period steps in ``csrc/`` here, and
+the generated controller step, compiled by the host build into one cffi
+library.  This module prepares the scenario arrays, fills the parameters
+every topology's simulator shares, calls ``<topology>_sim_run`` once per
+chunk of periods (so progress can be reported), carrying the C state across
+chunks so a chunked run equals one long run bit for bit, and builds each
+topology's ``Trace`` class from its trace field list.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from codegen.errors import MpcgenError
 from codegen.model import Model
-
-#: C sources of the shared dq model and speed PI (float64, host only).
-CSRC = Path(__file__).resolve().parent / "csrc"
-SHARED_SOURCES: tuple[Path, ...] = (CSRC / "pmsm_dq.c", CSRC / "speed_pi.c")
-SHARED_HEADERS: tuple[Path, ...] = (CSRC / "pmsm_dq.h", CSRC / "speed_pi.h")
+from codegen.simulator.api import SimApi
+from codegen.simulator.records import SimStruct
 
 #: Largest RK4 sub-step (plant-and-metrics.md "Integration": at most 1 us).
 MAX_SUBSTEP_S = 1e-6
-#: Periods per sim2l_run call (one progress report per chunk).
+#: Periods per <topology>_sim_run call (one progress report per chunk).
 DEFAULT_CHUNK = 10_000
 
 RPM_TO_RAD_S = 2.0 * math.pi / 60.0
@@ -82,36 +80,105 @@ def scenario_arrays(model: Model) -> tuple[np.ndarray, np.ndarray]:
 
 
 def fill_common_params(p: Any, model: Model) -> Any:
-    """Set the fields sim2l_params_t and sim3l_params_t share (motor, Udc, dt, speed PI, mode)."""
+    """Set the shared parameters ``p.common`` (motor, Udc, dt, speed PI, mode); return ``p``."""
     m, inv, c, sl = model.motor, model.inverter, model.controller, model.speed_loop
-    p.rs_ohm = m.rs_ohm
-    p.ld_h = m.ld_h
-    p.lq_h = m.lq_h
-    p.psi_f_wb = m.psi_f_wb
-    p.pole_pairs = int(m.pole_pairs)
-    p.j_kgm2 = m.j_kgm2
-    p.b_nms = m.b_nms
-    p.udc_v = inv.udc_v
-    p.dt_s = c.dt_s
-    p.kp = sl.kp
-    p.ki = sl.ki
-    p.limit_nm = sl.limit_nm
-    p.speed_imposed = 1 if model.scenario.speed_mode == "imposed" else 0
+    common = p.common
+    common.rs_ohm = m.rs_ohm
+    common.ld_h = m.ld_h
+    common.lq_h = m.lq_h
+    common.psi_f_wb = m.psi_f_wb
+    common.pole_pairs = int(m.pole_pairs)
+    common.j_kgm2 = m.j_kgm2
+    common.b_nms = m.b_nms
+    common.udc_v = inv.udc_v
+    common.dt_s = c.dt_s
+    common.kp = sl.kp
+    common.ki = sl.ki
+    common.limit_nm = sl.limit_nm
+    common.speed_imposed = 1 if model.scenario.speed_mode == "imposed" else 0
     return p
 
 
-_CTYPE = {np.dtype(np.float64): "double *", np.dtype(np.uint16): "unsigned short *",
-          np.dtype(np.float32): "float *"}
+def trace_fields(trace: SimStruct) -> dict[str, tuple[np.dtype, int]]:
+    """Every trace member (shared first): (dtype of one value, values per period)."""
+    out: dict[str, tuple[np.dtype, int]] = {}
+    s: SimStruct | None = trace
+    while s is not None:
+        out = {**{f.name: (s.np_type(f), f.length) for f in s.fields}, **out}
+        s = s.base
+    return out
+
+
+class TraceBase:
+    """Properties every topology's trace has (the arrays come from its field list)."""
+
+    dt_s: float
+    t_s: np.ndarray
+    omega_m_rad_s: np.ndarray
+    speed_ref_rad_s: np.ndarray
+
+    @property
+    def n(self) -> int:
+        """Number of periods."""
+        return int(self.t_s.shape[0])
+
+    @property
+    def duration_s(self) -> float:
+        """Simulated time n*dt_s."""
+        return self.n * self.dt_s
+
+    @property
+    def speed_rpm(self) -> np.ndarray:
+        """Mechanical speed in r/min."""
+        return self.omega_m_rad_s / RPM_TO_RAD_S
+
+    @property
+    def speed_ref_rpm(self) -> np.ndarray:
+        """Mechanical speed reference in r/min."""
+        return self.speed_ref_rad_s / RPM_TO_RAD_S
+
+
+def trace_class(name: str, module: str, trace: SimStruct, doc: str, scalars: tuple[str, ...] = (),
+                base: type = TraceBase) -> type:
+    """A frozen dataclass of one run: ``dt_s``, ``scalars`` (floats), every trace member, ``load_nm``.
+
+    The array fields are the trace struct's fields (read-only arrays; shape
+    (n,) or (n, w) for w values per period).
+    """
+    fields: list[tuple[str, type]] = [("dt_s", float), *[(s, float) for s in scalars]]
+    fields += [(f, np.ndarray) for f in trace_fields(trace)] + [("load_nm", np.ndarray)]
+    return dataclasses.make_dataclass(name, fields, bases=(base,), frozen=True, eq=False,
+                                      namespace={"__doc__": doc, "__module__": module})
+
+
+def motor_inputs(trace: Any, model: Model, dtype: np.dtype) -> np.ndarray:
+    """Controller-input records with the fields every topology's loop fills alike.
+
+    ``ia_a``, ``ib_a``, ``theta_e_rad``, ``omega_e_rad_s`` = p*omega_m and
+    ``torque_ref_nm``: each the float64 sample rounded once to float32, as
+    the C cast does (sim_period.h step 4); the other fields are zero.
+    """
+    rec = np.zeros(trace.n, dtype=dtype)
+    rec["ia_a"] = trace.ia_a.astype(np.float32)
+    rec["ib_a"] = trace.ib_a.astype(np.float32)
+    rec["theta_e_rad"] = trace.theta_e_rad.astype(np.float32)
+    rec["omega_e_rad_s"] = (float(model.motor.pole_pairs) * trace.omega_m_rad_s).astype(np.float32)
+    rec["torque_ref_nm"] = trace.torque_ref_nm.astype(np.float32)
+    return rec
+
+
+def _c_pointer(trace: SimStruct, name: str) -> str:
+    """C pointer type of trace member ``name`` (as the generated struct declares it)."""
+    s = trace.owner(name)
+    return s.layout.c_type(s.record.field(name)) + " *"
 
 
 def run_chunked(
     ffi: Any,
     lib: Any,
-    api: str,
+    api: SimApi,
     model: Model,
     params: Any,
-    fields: dict[str, tuple[Any, int]],
-    errors: dict[int, str],
     progress: Callable[[float], None] | None,
     chunk: int,
     initial_speed_rad_s: float = 0.0,
@@ -121,23 +188,25 @@ def run_chunked(
     ``initial_speed_rad_s``: mechanical speed of the plant at t = 0 (default
     standstill), e.g. to start a load-step scenario at rated speed.
 
-    ``fields`` maps each trace member to (dtype, values per period); a member
-    with w > 1 values per period is returned with shape (n, w).  The returned
-    arrays (plus ``load_nm``) are read-only.  ``errors`` maps the C return
-    codes to messages.  ``progress`` is called after every chunk with the
-    completed fraction in (0, 1].  Raises :class:`SimulationError` if the
-    simulator refuses the parameters or the run diverges.
+    Every member of ``api.trace`` is recorded; a member with w > 1 values
+    per period is returned with shape (n, w).  The returned arrays (plus
+    ``load_nm``) are read-only.  ``api.errors`` maps the C return codes to
+    messages.  ``progress`` is called after every chunk with the completed
+    fraction in (0, 1].  Raises :class:`SimulationError` if the simulator
+    refuses the parameters or the run diverges.
     """
     if chunk < 1:
         raise ValueError("chunk must be >= 1")
+    fields = trace_fields(api.trace)
     speed_ref, load = scenario_arrays(model)
     n = speed_ref.shape[0]
-    state = ffi.new(f"{api}_state_t *")
+    prefix = api.prefix
+    state = ffi.new(f"{api.state.ctype} *")
     where = f"{model.source or model.name}"
-    if getattr(lib, f"{api}_init")(params, state) != 0:
-        raise SimulationError(f"{where}: {errors[-1]}")
-    state.omega_m_rad_s = float(initial_speed_rad_s)
-    run = getattr(lib, f"{api}_run")
+    if getattr(lib, f"{prefix}_init")(params, state) != 0:
+        raise SimulationError(f"{where}: {api.errors[-1]}")
+    state.common.motor.omega_m_rad_s = float(initial_speed_rad_s)
+    run = getattr(lib, f"{prefix}_run")
 
     arrays: dict[str, np.ndarray] = {k: np.zeros(n * w, dtype=t) for k, (t, w) in fields.items()}
     keep = []  # keep the buffers alive while C holds pointers into them
@@ -145,20 +214,21 @@ def run_chunked(
     for name, arr in arrays.items():
         buf = ffi.from_buffer(arr, require_writable=True)
         keep.append(buf)
-        base[name] = ffi.cast(_CTYPE[arr.dtype], buf)
+        base[name] = ffi.cast(_c_pointer(api.trace, name), buf)
     ref_buf, load_buf = ffi.from_buffer(speed_ref), ffi.from_buffer(load)
     ref_ptr, load_ptr = ffi.cast("double *", ref_buf), ffi.cast("double *", load_buf)
-    trace_c = ffi.new(f"{api}_trace_t *")
+    trace_c = ffi.new(f"{api.trace.ctype} *")
+    holders = {name: trace_c if api.trace.owner(name) is api.trace else trace_c.common for name in fields}
 
     k0 = 0
     while k0 < n:
         k1 = min(n, k0 + chunk)
         for name, ptr in base.items():
-            setattr(trace_c, name, ptr + k0 * fields[name][1])
+            setattr(holders[name], name, ptr + k0 * fields[name][1])
         rc = run(params, ref_ptr + k0, load_ptr + k0, k1 - k0, trace_c, state)
         if rc != 0:
-            k_fail = int(state.k)
-            reason = errors.get(rc, f"simulator error {rc}")
+            k_fail = int(state.common.k)
+            reason = api.errors.get(rc, f"simulator error {rc}")
             raise SimulationError(
                 f"{where}: closed-loop run stopped at period {k_fail} "
                 f"(t = {k_fail * model.controller.dt_s:.6g} s): {reason}"

@@ -1,6 +1,6 @@
 /*
- * pmsm_dq.h -- PMSM dq model shared by the two-level (plant2l.c) and the
- * three-level (plant3l.c) host plants, float64 (hand-written runtime).
+ * pmsm_dq.h -- PMSM dq model shared by the two-level (twolevel_plant.c) and
+ * the T-type (ttype_plant.c) host plants, float64 (hand-written runtime).
  *
  * Specification: shared/spec/plant-and-metrics.md "Plant" and
  * shared/spec/mptc-two-level.md "Conventions" (amplitude-invariant

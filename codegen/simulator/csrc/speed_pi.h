@@ -1,6 +1,6 @@
 /*
- * speed_pi.h -- speed PI of the closed-loop host simulators (sim2l.c,
- * sim3l.c), float64 (hand-written runtime).
+ * speed_pi.h -- speed PI of the closed-loop host simulators (sim_period.c),
+ * float64 (hand-written runtime).
  *
  * Specification: shared/spec/mptc-two-level.md "Parameters and scenarios"
  * (speed PI on the mechanical speed error in rad/s, clamped output with

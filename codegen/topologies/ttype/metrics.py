@@ -32,7 +32,7 @@ Definitions (shared/spec/plant-and-metrics.md "Metrics", mpdtc-three-level.md):
   and consecutive non-empty segments, period boundaries included) / (3 t).
 * ``Cal_ave``: evaluated candidates per step (``n_eval``), averaged.
 
-Windows: as :func:`codegen.metrics.two_level_metrics` -- RMSE, f_ave, Cal_ave
+Windows (:func:`codegen.metrics.run_windows`): RMSE, f_ave, Cal_ave
 and the jump histogram over the whole run (or ``stats_window``); std/pp of the
 ripples and V_o over the steady windows (last ``window_s`` of each
 constant-reference segment).
@@ -47,11 +47,12 @@ import numpy as np
 from codegen.metrics import (
     GRID_TOL,
     fundamental_hz,
-    ripple_stats,
     ripple_summary,
+    run_windows,
     sample_time,
-    steady_windows,
+    steady_ripples,
     thd,
+    thd_ia,
     thd_window,
     window_mask,
     window_slice,
@@ -59,7 +60,7 @@ from codegen.metrics import (
 from codegen.model import Model
 
 if TYPE_CHECKING:  # pragma: no cover
-    from codegen.topologies.ttype.sim import Trace3
+    from codegen.topologies.ttype.sim import Trace
 
 __all__ = [
     "UAB_GRID_S",
@@ -119,7 +120,7 @@ def resample_piecewise(values: Any, durations: Any, dt_grid: float, n_samples: i
 
 
 def uab_thd(
-    trace: Trace3,
+    trace: Trace,
     t0: float,
     t1: float,
     f1_hz: float,
@@ -206,7 +207,7 @@ def leg_level_changes(seg_states: Any, seg_s: Any, initial_state: int = _OOO) ->
 # all three-level metrics of one run
 # ---------------------------------------------------------------------------
 def three_level_metrics(
-    trace: Trace3,
+    trace: Trace,
     model: Model,
     stats_window: tuple[float, float] | None = None,
     window_s: float = 0.2,
@@ -215,59 +216,31 @@ def three_level_metrics(
     uab_f_max_hz: float = UAB_F_MAX_HZ,
 ) -> dict[str, Any]:
     """The three-level metric set of one closed-loop run (JSON-ready values)."""
-    dt, n = trace.dt_s, trace.n
-    windows = steady_windows(model, window_s)
+    dt = trace.dt_s
     psi_ref = trace.psi_ref_wb.astype(np.float64)
-
-    if stats_window is None:
-        run_mask = None
-        sl = slice(0, n)
-        run_desc = {"t0_s": 0.0, "t1_s": sample_time(n, dt), "n_samples": n, "description": "whole run"}
-        rip_mask = window_mask(n, dt, windows)
-        rip_desc = {
-            "windows_s": [[a, b] for a, b in windows],
-            "n_samples": int(np.count_nonzero(rip_mask)),
-            "description": f"steady windows: last {window_s:g} s of each constant-reference segment",
-        }
-        uab_before: float | None = 0.0  # OOO before the first period
-    else:
-        sl = window_slice(dt, stats_window[0], stats_window[1], n)
-        run_mask = np.zeros(n, dtype=bool)
-        run_mask[sl] = True
-        run_desc = {"t0_s": sample_time(sl.start, dt), "t1_s": sample_time(sl.stop, dt), "n_samples": sl.stop - sl.start,
-                    "description": "window given by the caller"}
-        rip_mask = run_mask
-        rip_desc = dict(run_desc)
-        uab_before = 0.0
-        if sl.start > 0:
-            prev_v = trace.uab_v[: sl.start].ravel()[trace.seg_s[: sl.start].ravel() > 0]
-            uab_before = float(prev_v[-1]) if prev_v.size else 0.0
+    w = run_windows(trace, model, stats_window, window_s, "whole run")
+    sl, run_desc = w.sl, w.run_desc
+    uab_before: float | None = 0.0  # OOO before the first period
+    if stats_window is not None and sl.start > 0:
+        prev_v = trace.uab_v[: sl.start].ravel()[trace.seg_s[: sl.start].ravel() > 0]
+        uab_before = float(prev_v[-1]) if prev_v.size else 0.0
     t_run = (sl.stop - sl.start) * dt
 
-    vo = trace.vo_v if rip_mask is None else trace.vo_v[np.asarray(rip_mask)]
+    vo = trace.vo_v[np.asarray(w.rip_mask)]
     vo_stats = {
         "std": float(np.std(vo)) if vo.size else math.nan,
         "pp": float(np.ptp(vo)) if vo.size else math.nan,
         "mean": float(np.mean(vo)) if vo.size else math.nan,
     }
 
-    thd_ia, thd_uab = math.nan, math.nan
-    tw = thd_window(trace, model, window_s)  # type: ignore[arg-type]
-    if tw is None:
-        ia_info: dict[str, Any] = {"description": "no steady window with a nonzero speed reference"}
-        uab_info: dict[str, Any] = dict(ia_info)
-    else:
-        f1 = fundamental_hz(trace, model, *tw)
+    thd_uab = math.nan
+    tw = thd_window(trace, model, window_s)
+    thd_ia_value, ia_info = thd_ia(trace, model, tw, f_max_hz, "i_a over")
+    uab_info: dict[str, Any] = {"description": "no steady window with a nonzero speed reference"}
+    if tw is not None:
         try:
-            thd_ia, ia_info = thd(trace.ia_a, dt, tw[0], tw[1], f1, f_max_hz)
-            ia_info["description"] = (
-                f"i_a over [{tw[0]:g}, {tw[1]:g}) s, {ia_info['n_periods']} fundamental periods, "
-                f"harmonics {ia_info['harmonics'][0]}..{ia_info['harmonics'][1]}"
-            )
-        except ValueError as exc:
-            ia_info = {"description": f"THD not computed: {exc}", "window_s": list(tw)}
-        try:
-            thd_uab, uab_info = uab_thd(trace, tw[0], tw[1], f1, uab_grid_s, uab_f_max_hz)
+            thd_uab, uab_info = uab_thd(trace, tw[0], tw[1], fundamental_hz(trace, model, *tw), uab_grid_s,
+                                        uab_f_max_hz)
             uab_info["description"] = (
                 f"switched u_ab over [{uab_info['t0_s']:g}, {uab_info['t1_s']:.6g}) s, "
                 f"{uab_info['n_periods']} fundamental periods, box-averaged onto a "
@@ -280,23 +253,15 @@ def three_level_metrics(
     jumps = line_jump_histogram(trace.uab_v[sl], trace.seg_s[sl], trace.udc_v, uab_before)
     legs = int(np.sum(trace.leg_changes[sl], dtype=np.int64))
 
-    steady = []
-    for a, b in windows:
-        m = window_mask(n, dt, (a, b))
-        ts = ripple_stats(trace.te_nm, trace.torque_ref_nm, m)
-        ps = ripple_stats(trace.psi_wb, psi_ref, m)
-        v = trace.vo_v[m]
-        steady.append({
-            "t0_s": a, "t1_s": b,
-            "T_rip_RMSE": ts["rmse"], "T_rip_std": ts["std"], "T_rip_pp": ts["pp"],
-            "psi_rip_RMSE": ps["rmse"], "psi_rip_std": ps["std"], "psi_rip_pp": ps["pp"],
-            "Vo_std": float(np.std(v)) if v.size else math.nan,
-            "Vo_pp": float(np.ptp(v)) if v.size else math.nan,
-        })
+    steady = steady_ripples(trace, w.windows, psi_ref)
+    for row in steady:
+        v = trace.vo_v[window_mask(trace.n, dt, (row["t0_s"], row["t1_s"]))]
+        row["Vo_std"] = float(np.std(v)) if v.size else math.nan
+        row["Vo_pp"] = float(np.ptp(v)) if v.size else math.nan
 
     return {
-        **ripple_summary(trace, psi_ref, run_mask, rip_mask),
-        "THD_ia": thd_ia,
+        **ripple_summary(trace, psi_ref, w.run_mask, w.rip_mask),
+        "THD_ia": thd_ia_value,
         "THD_uab": thd_uab,
         "Vo_std": vo_stats["std"],
         "Vo_pp": vo_stats["pp"],
@@ -317,7 +282,7 @@ def three_level_metrics(
                 "n_boundaries": jumps["n_boundaries"],
                 "n_jumps": jumps["n_jumps"],
             },
-            "ripple_std_pp_Vo": rip_desc,
+            "ripple_std_pp_Vo": w.rip_desc,
             "THD_ia": ia_info,
             "THD_uab": uab_info,
         },

@@ -2,7 +2,7 @@
 
 Plot list: shared/spec/plant-and-metrics.md, last paragraph (torque and
 reference, flux magnitude, phase currents, and for three-level V_o and u_ab).
-Figures use the object-oriented API as codegen/plots.py.
+Figures use the object-oriented API (codegen/plotting.py).
 """
 from __future__ import annotations
 
@@ -14,14 +14,14 @@ import numpy as np
 
 from codegen.metrics import thd_window, window_slice
 from codegen.model import Model
-from codegen.plotting import new_figure, save_figure
+from codegen.plotting import new_figure, plot_lines, plot_phase_currents, plot_torque, save_figure
 
 if TYPE_CHECKING:  # pragma: no cover
-    from codegen.topologies.ttype.sim import Trace3
+    from codegen.topologies.ttype.sim import Trace
 
 __all__ = ["plot_three_level", "uab_steps"]
 
-def uab_steps(trace: Trace3, sl: slice) -> tuple[np.ndarray, np.ndarray]:
+def uab_steps(trace: Trace, sl: slice) -> tuple[np.ndarray, np.ndarray]:
     """(t, u_ab) step-plot points of the applied segments of periods sl (zero-length dropped)."""
     dt = trace.dt_s
     k = np.arange(sl.start, sl.stop)
@@ -36,7 +36,7 @@ def uab_steps(trace: Trace3, sl: slice) -> tuple[np.ndarray, np.ndarray]:
     return t, v
 
 
-def plot_three_level(trace: Trace3, model: Model, strategy: str, speed_rpm: float,
+def plot_three_level(trace: Trace, model: Model, strategy: str, speed_rpm: float,
                      outdir: str | Path) -> list[Path]:
     """Write ``<strategy>_<speed>rpm_{torque,flux,currents,vo,uab}.png`` into outdir.
 
@@ -63,45 +63,20 @@ def plot_three_level(trace: Trace3, model: Model, strategy: str, speed_rpm: floa
         t_end = trace.n * dt
     k_end = min(trace.n, int(round(t_end / dt)))
 
-    # torque
-    fig, (ax,) = new_figure()
-    ax.plot(t, trace.te_nm, color="tab:blue", lw=0.4, label="plant torque Te")
-    ax.plot(t, trace.torque_ref_nm, color="k", lw=1.0, label="reference T*")
-    ax.set(xlabel="time t / s", ylabel="torque / (N*m)", title=f"{title}: electromagnetic torque")
-    ax.grid(True, alpha=0.3)
-    ax.legend(loc="best")
-    paths.append(save_figure(fig, out / f"{tag}_torque.png"))
-
-    # flux
-    fig, (ax,) = new_figure()
-    ax.plot(t, trace.psi_wb, color="tab:blue", lw=0.4, label="plant |psi_s|")
-    ax.plot(t, trace.psi_ref_wb, color="k", lw=1.0, label="controller psi*")
-    ax.set(xlabel="time t / s", ylabel="stator flux |psi_s| / Wb", title=f"{title}: stator-flux magnitude")
-    ax.grid(True, alpha=0.3)
-    ax.legend(loc="best")
-    paths.append(save_figure(fig, out / f"{tag}_flux.png"))
+    paths.append(plot_torque(out / f"{tag}_torque.png", title, trace))
+    paths.append(plot_lines(out / f"{tag}_flux.png", f"{title}: stator-flux magnitude", "stator flux |psi_s| / Wb", t, [
+        (trace.psi_wb, "plant |psi_s|", {"color": "tab:blue", "lw": 0.4}),
+        (trace.psi_ref_wb, "controller psi*", {"color": "k", "lw": 1.0}),
+    ]))
 
     # currents: whole run + two fundamental periods
     span = 2.0 / f1 if f1 > 0 else 0.02
     zoom = slice(max(0, k_end - int(round(span / dt))), k_end)
-    fig, axes = new_figure(2, height=7.0)
-    for ax, s, label in ((axes[0], slice(0, trace.n), "whole run"), (axes[1], zoom, "zoom")):
-        ax.plot(t[s], trace.ia_a[s], lw=0.5, label="i_a")
-        ax.plot(t[s], trace.ib_a[s], lw=0.5, label="i_b")
-        ax.plot(t[s], trace.ic_a[s], lw=0.5, label="i_c")
-        ax.set(xlabel="time t / s", ylabel="phase current / A", title=f"{title}: phase currents ({label})")
-        ax.grid(True, alpha=0.3)
-        ax.legend(loc="upper right")
-    paths.append(save_figure(fig, out / f"{tag}_currents.png"))
+    paths.append(plot_phase_currents(out / f"{tag}_currents.png", title, trace, zoom))
 
-    # neutral-point voltage
-    fig, (ax,) = new_figure()
-    ax.plot(t, trace.vo_v, color="tab:blue", lw=0.5, label="plant V_o = (u_c1 - u_c2)/2")
-    ax.axhline(0.0, color="k", lw=0.8)
-    ax.set(xlabel="time t / s", ylabel="V_o / V", title=f"{title}: neutral-point voltage")
-    ax.grid(True, alpha=0.3)
-    ax.legend(loc="best")
-    paths.append(save_figure(fig, out / f"{tag}_vo.png"))
+    paths.append(plot_lines(out / f"{tag}_vo.png", f"{title}: neutral-point voltage", "V_o / V", t,
+                            [(trace.vo_v, "plant V_o = (u_c1 - u_c2)/2", {"color": "tab:blue", "lw": 0.5})],
+                            hline=(0.0, "")))
 
     # line voltage: 10 control periods and one fundamental period
     half = 0.5 * trace.udc_v

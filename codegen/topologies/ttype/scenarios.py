@@ -43,11 +43,11 @@ def load_step_model(model: Model) -> Model:
 def _run(model: Model, log: Callable[[str], None], label: str, initial_speed_rpm: float = 0.0):
     from codegen.topologies.ttype.derive import derive_three_level
     from codegen.topologies.ttype.hostbuild import build_three_level_library
-    from codegen.topologies.ttype.sim import run_closed_loop3
+    from codegen.topologies.ttype.sim import run_closed_loop
 
     lib = build_three_level_library(model, derive_three_level(model), with_sim=True)
     t0 = time.perf_counter()
-    trace = run_closed_loop3(lib.ffi, lib.lib, model, progress=lambda f: log(f"  {label} {f:5.0%}"),
+    trace = run_closed_loop(lib.ffi, lib.lib, model, progress=lambda f: log(f"  {label} {f:5.0%}"),
                              initial_speed_rpm=initial_speed_rpm)
     return trace, time.perf_counter() - t0
 

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 
 from codegen.metrics import amplitude_spectrum, fundamental_hz, thd, thd_window, window_slice
 from codegen.model import Model
-from codegen.plotting import new_figure, save_figure
+from codegen.plotting import new_figure, plot_lines, plot_phase_currents, plot_torque, save_figure
 
 if TYPE_CHECKING:  # pragma: no cover
     from codegen.topologies.twolevel.sim import Trace
@@ -32,51 +32,25 @@ def plot_two_level(trace: Trace, model: Model, strategy: str, outdir: str | Path
     title = f"{model.name}: {strategy}"
     paths: list[Path] = []
 
-    # speed
-    fig, (ax,) = new_figure()
-    ax.plot(t, trace.speed_ref_rpm, color="k", lw=1.0, ls="--", label="reference n*")
-    ax.plot(t, trace.speed_rpm, color="tab:blue", lw=0.8, label="actual n")
-    ax.set(xlabel="time t / s", ylabel="speed n / (r/min)", title=f"{title}: rotor speed")
-    ax.grid(True, alpha=0.3)
-    ax.legend(loc="best")
-    paths.append(save_figure(fig, out / f"{strategy}_speed.png"))
-
-    # torque
-    fig, (ax,) = new_figure()
-    ax.plot(t, trace.te_nm, color="tab:blue", lw=0.4, label="plant torque Te")
-    ax.plot(t, trace.torque_ref_nm, color="k", lw=1.0, label="reference T*")
-    ax.set(xlabel="time t / s", ylabel="torque / (N*m)", title=f"{title}: electromagnetic torque")
-    ax.grid(True, alpha=0.3)
-    ax.legend(loc="best")
-    paths.append(save_figure(fig, out / f"{strategy}_torque.png"))
-
-    # flux magnitude
-    fig, (ax,) = new_figure()
-    ax.plot(t, trace.psi_wb, color="tab:blue", lw=0.4, label="plant |psi_s|")
-    ax.axhline(model.controller.psi_ref_wb, color="k", lw=1.0, label="reference psi*")
-    ax.set(xlabel="time t / s", ylabel="stator flux |psi_s| / Wb", title=f"{title}: stator-flux magnitude")
-    ax.grid(True, alpha=0.3)
-    ax.legend(loc="best")
-    paths.append(save_figure(fig, out / f"{strategy}_flux.png"))
+    paths.append(plot_lines(out / f"{strategy}_speed.png", f"{title}: rotor speed", "speed n / (r/min)", t, [
+        (trace.speed_ref_rpm, "reference n*", {"color": "k", "lw": 1.0, "ls": "--"}),
+        (trace.speed_rpm, "actual n", {"color": "tab:blue", "lw": 0.8}),
+    ]))
+    paths.append(plot_torque(out / f"{strategy}_torque.png", title, trace))
+    paths.append(plot_lines(out / f"{strategy}_flux.png", f"{title}: stator-flux magnitude",
+                            "stator flux |psi_s| / Wb", t,
+                            [(trace.psi_wb, "plant |psi_s|", {"color": "tab:blue", "lw": 0.4})],
+                            hline=(model.controller.psi_ref_wb, "reference psi*")))
 
     # phase currents: whole run + zoom on two fundamental periods of the THD window
     tw = thd_window(trace, model)
-    fig, axes = new_figure(2, height=7.0)
     if tw is not None:
         f1 = fundamental_hz(trace, model, *tw)
         span = 2.0 / f1 if f1 > 0 else tw[1] - tw[0]
         zoom = window_slice(trace.dt_s, max(tw[0], tw[1] - span), tw[1], trace.n)
     else:
         zoom = slice(max(0, trace.n - int(round(0.05 / trace.dt_s))), trace.n)
-    for ax, sl, label in ((axes[0], slice(0, trace.n), "whole run"), (axes[1], zoom, "zoom")):
-        lo, hi = sl.start, sl.stop
-        ax.plot(t[lo:hi], trace.ia_a[lo:hi], lw=0.5, label="i_a")
-        ax.plot(t[lo:hi], trace.ib_a[lo:hi], lw=0.5, label="i_b")
-        ax.plot(t[lo:hi], trace.ic_a[lo:hi], lw=0.5, label="i_c")
-        ax.set(xlabel="time t / s", ylabel="phase current / A", title=f"{title}: phase currents ({label})")
-        ax.grid(True, alpha=0.3)
-        ax.legend(loc="upper right")
-    paths.append(save_figure(fig, out / f"{strategy}_currents.png"))
+    paths.append(plot_phase_currents(out / f"{strategy}_currents.png", title, trace, zoom))
 
     # spectrum of i_a over the THD window
     fig, (ax,) = new_figure()

@@ -1,11 +1,8 @@
-"""Three-level MPDTC step (mpdtc-three-level.md, numerics.md): strict
+"""T-type three-level MPDTC step (mpdtc-three-level.md, numerics.md): strict
 compilation for every target profile, deterministic rendering, bit-for-bit
 equality of the generated C and the Python reference, and the decision's
 properties (switching constraint, T_N range, segment times)."""
 from __future__ import annotations
-
-import re
-import subprocess
 
 import numpy as np
 import pytest
@@ -16,29 +13,42 @@ from codegen.topologies.ttype import reference
 from codegen.topologies.ttype import transitions as tr
 from codegen.topologies.ttype import vectors as v
 from codegen.topologies.ttype import virtual as vv
-from codegen.topologies.ttype.derive import derive_three_level, t_n_min
-from codegen.topologies.ttype.hostbuild import build_three_level_library
+from codegen.topologies.ttype.derive import t_n_min
+from codegen.topologies.ttype.plugin import PLUGIN
 from codegen.topologies.ttype.records import FAULT, INPUT_DTYPE, SAFE_STATE
-from codegen.topologies.ttype.render import render_three_level
 from codegen.topologies.ttype.states import adversarial_states, random_states
 
-from conftest import EXAMPLES, require_tool
+from conftest import (
+    TTYPE,
+    TTYPE_STRATEGIES,
+    assert_c28x_clean,
+    assert_symbols_prefixed,
+    compile_m7,
+    compile_strict,
+)
 
-TLEVEL = EXAMPLES / "seed000_tlevel.toml"
-STRATEGIES = ("mpdtc27", "mpdtc63")
-WARN = ["-std=c99", "-Wall", "-Wextra", "-Wconversion", "-Wdouble-promotion", "-Werror"]
-ARM = ["-mcpu=cortex-m7", "-mthumb", "-mfpu=fpv5-d16", "-mfloat-abi=hard", "-O2", "-ffp-contract=off", "-fno-math-errno"]
+STRATEGIES = TTYPE_STRATEGIES
 
 
 def model(strategy: str):
-    return load_config(TLEVEL, {"controller.strategy": strategy})
+    return load_config(TTYPE, {"controller.strategy": strategy})
+
+
+def derive(m):
+    """The T-type tables of ``m`` (through the plugin interface)."""
+    return PLUGIN.derive(m)
+
+
+def render(m, t, target: str) -> dict[str, str]:
+    """File name -> generated C text for ``target``."""
+    return PLUGIN.render(m, t, target)
 
 
 @pytest.fixture(scope="module", params=STRATEGIES)
 def built(request):
     m = model(request.param)
-    t = derive_three_level(m)
-    return m, t, build_three_level_library(m, t)
+    t = derive(m)
+    return m, t, PLUGIN.host_library(m, t)
 
 
 def _write(tmp_path, files):
@@ -48,50 +58,36 @@ def _write(tmp_path, files):
 
 @pytest.mark.parametrize("strategy", STRATEGIES)
 def test_compiles_strict_for_every_target(tmp_path, strategy):
-    arm = require_tool("arm-none-eabi-gcc", "gcc-arm-none-eabi")
     m = model(strategy)
-    t = derive_three_level(m)
+    t = derive(m)
     for target in ("host", "stm32h743", "tms320f28377"):
         d = tmp_path / target
         d.mkdir()
-        files = render_three_level(m, t, target)
+        files = render(m, t, target)
         _write(d, files)
         src = d / f"{m.prefix}_mpc.c"
-        r = subprocess.run(["gcc", *WARN, "-O2", "-ffp-contract=off", "-c", str(src), "-o", str(d / "x.o")],
-                           capture_output=True, text=True)
-        assert r.returncode == 0, r.stderr
+        compile_strict(src, d / "x.o")
         if target == "stm32h743":
-            r = subprocess.run([arm, *ARM, *WARN, "-c", str(src), "-o", str(d / "m7.o")], capture_output=True, text=True)
-            assert r.returncode == 0, r.stderr
-            syms = subprocess.run(["arm-none-eabi-objdump", "-h", str(d / "m7.o")], capture_output=True, text=True).stdout
-            assert ".itcm_text" in syms and ".dtcm_rodata" in syms
+            compile_m7(src, d / "m7.o")
         if target == "tms320f28377":
-            for f in files.values():
-                code = re.sub(r"/\*.*?\*/", "", f, flags=re.S)
-                for bad in ("int8_t", "uint8_t", "double", "char "):
-                    assert bad not in code
+            for name, text in files.items():
+                assert_c28x_clean(name, text)
         assert "#define MPC_TOPOLOGY_THREE_LEVEL 1" in files["mpc_binding.h"]
 
 
 @pytest.mark.parametrize("strategy", STRATEGIES)
 def test_every_symbol_is_prefixed(tmp_path, strategy):
     m = model(strategy)
-    _write(tmp_path, render_three_level(m, derive_three_level(m), "host"))
-    subprocess.run(["gcc", "-std=c99", "-O2", "-c", str(tmp_path / f"{m.prefix}_mpc.c"), "-o", str(tmp_path / "x.o")],
-                   check=True)
-    nm = subprocess.run(["nm", str(tmp_path / "x.o")], capture_output=True, text=True, check=True).stdout
-    for line in nm.splitlines():
-        parts = line.split()
-        if len(parts) >= 2 and parts[-2] in "TtDdRrBb" and not parts[-1].startswith("."):
-            assert parts[-1].startswith(m.prefix + "_"), parts[-1]
+    _write(tmp_path, render(m, derive(m), "host"))
+    assert_symbols_prefixed(tmp_path / f"{m.prefix}_mpc.c", tmp_path / "x.o", m.prefix)
 
 
 @pytest.mark.parametrize("strategy", STRATEGIES)
 def test_rendering_is_deterministic(strategy):
     m = model(strategy)
     for target in ("host", "stm32h743", "tms320f28377"):
-        a = render_three_level(m, derive_three_level(m), target)
-        b = render_three_level(model(strategy), derive_three_level(model(strategy)), target)
+        a = render(m, derive(m), target)
+        b = render(model(strategy), derive(model(strategy)), target)
         assert a == b
 
 
@@ -162,8 +158,8 @@ def test_switching_constraint_t_n_and_segments(built):
 def test_27_reaches_large_line_jumps_63_does_not():
     """27-MPDTC has no switching constraint (spec), so jumps above Udc/2 occur."""
     m = model("mpdtc27")
-    t = derive_three_level(m)
-    lib = build_three_level_library(m, t)
+    t = derive(m)
+    lib = PLUGIN.host_library(m, t)
     x, out = _decisions(m, t, lib, n=20_000)
     basic = x["prev_vector"] < 27
     jumps = [tr.line_jump_max(int(p), int(s)) for p, s in zip(x["prev_vector"][basic], out["states"][basic, 0])]

@@ -1,4 +1,4 @@
-"""Three-level metrics (codegen/metrics3l.py) on synthetic waveforms with known answers."""
+"""T-type metrics (codegen/topologies/ttype/metrics.py) on synthetic waveforms with known answers."""
 from __future__ import annotations
 
 import math
@@ -15,7 +15,7 @@ from codegen.topologies.ttype.metrics import (
     uab_thd,
 )
 from codegen.topologies.ttype.plots import plot_three_level
-from codegen.topologies.ttype.sim import run_closed_loop3
+from codegen.topologies.ttype.sim import run_closed_loop
 
 from .conftest import seed000_model
 
@@ -122,13 +122,13 @@ def test_thd_uab_of_a_held_sine_is_analytic():
     assert pwm > 5 * value
 
 
-def test_metrics_and_plots_of_a_run(stub3, tmp_path):
-    ffi, lib, mode = stub3
+def test_metrics_and_plots_of_a_run(stub, tmp_path):
+    ffi, lib, mode = stub
     results = {}
     for m_ in (27, 63):
         mode(m_)
         model = seed000_model(3000.0, 0.3)
-        tr = run_closed_loop3(ffi, lib, model)
+        tr = run_closed_loop(ffi, lib, model)
         r = three_level_metrics(tr, model, window_s=0.1)
         results[m_] = r
         for key in ("T_rip_RMSE", "psi_rip_RMSE", "THD_ia", "THD_uab", "Vo_std", "Vo_pp", "f_ave_hz", "Cal_ave"):

@@ -1,4 +1,4 @@
-"""Plant (firmware/runtime/plant3l.c) against scipy, RK4 convergence, V_o sign convention.
+"""T-type plant (csrc/ttype_plant.c) against scipy, RK4 convergence, V_o sign convention.
 
 plant-and-metrics.md "Integration": RK4 with sub-steps of at most 1 us over
 each constant segment, halving the sub-step changes the currents by < 1e-6 A.
@@ -12,7 +12,16 @@ import math
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
+
+from tests.fixtures.plantref import (
+    assert_fourth_order,
+    assert_matches,
+    integrate,
+    motor_derivs,
+    park,
+    phase_currents,
+)
+from tests.fixtures.plantref import plant_params as _plant_params
 
 TS = 50e-6
 N_PERIODS = 120
@@ -24,10 +33,9 @@ IPM = dict(SEED000, ld_h=1.2e-3, lq_h=2.4e-3, c_f=470e-6)
 POO, ONN, OOO = 22, 9, 13
 
 
-def _params(ffi, d):
-    p = ffi.new("plant3l_params_t *")
-    for k, v in d.items():
-        setattr(p, k, v)
+def _params(ffi, d, substep_max=1e-6, imposed=0):
+    p = _plant_params(ffi, "ttype_sim_params_t", d, imposed)
+    p.substep_max_s = substep_max
     return p
 
 
@@ -47,11 +55,10 @@ def _segments(seed=3, n=N_PERIODS):
 
 
 def _rhs(d, st, load, imposed):
-    rs, ld, lq, pf, p = d["rs_ohm"], d["ld_h"], d["lq_h"], d["psi_f_wb"], d["pole_pairs"]
     lv = _levels(int(st))
 
     def f(_t, x):
-        i_d, i_q, wm, th, vo = x
+        th, vo = x[3], x[4]
         uc1, uc2 = d["udc_v"] / 2 + vo, d["udc_v"] / 2 - vo
         uxo = [uc1 if s == 1 else (-uc2 if s == -1 else 0.0) for s in lv]
         cm = sum(uxo) / 3
@@ -59,72 +66,58 @@ def _rhs(d, st, load, imposed):
         ual = 2 / 3 * (ua - 0.5 * ub - 0.5 * uc)
         ube = (ub - uc) / math.sqrt(3)
         c, s = math.cos(th), math.sin(th)
-        ud, uq = ual * c + ube * s, -ual * s + ube * c
-        we = p * wm
-        did = (ud - rs * i_d + we * lq * i_q) / ld
-        diq = (uq - rs * i_q - we * ld * i_d - we * pf) / lq
-        te = 1.5 * p * ((ld * i_d + pf) * i_q - lq * i_q * i_d)
-        dwm = 0.0 if imposed else (te - load - d["b_nms"] * wm) / d["j_kgm2"]
-        ial, ibe = i_d * c - i_q * s, i_d * s + i_q * c
+        ial, ibe = x[0] * c - x[1] * s, x[0] * s + x[1] * c
         ix = (ial, -ial / 2 + math.sqrt(3) / 2 * ibe, -ial / 2 - math.sqrt(3) / 2 * ibe)
         io = sum((1 - abs(sx)) * i for sx, i in zip(lv, ix))
-        return [did, diq, dwm, we, io / (2 * d["c_f"])]
+        return motor_derivs(d, x, *park(ual, ube, th), load, imposed) + [io / (2 * d["c_f"])]
 
     return f
 
 
 def _run_c(ffi, lib, d, states, seg, x0, load, substep_max=1e-6, imposed=0):
-    p = _params(ffi, d)
-    s = ffi.new("plant3l_state_t *", x0)
+    p = _params(ffi, d, substep_max, imposed)
+    s = _state(ffi, **x0)
     out = np.zeros((len(states), 5))
     for k in range(len(states)):
-        st = ffi.new("unsigned short[7]", states[k].tolist())
+        st = ffi.new("uint16_t[7]", states[k].tolist())
         sg = ffi.new("double[7]", seg[k].tolist())
-        assert lib.plant3l_advance_segments(s, p, st, sg, load, substep_max, imposed, ffi.NULL) == 0
-        out[k] = (s.i_d_a, s.i_q_a, s.omega_m_rad_s, s.theta_e_rad, s.vo_v)
+        assert lib.ttype_plant_advance_segments(s, p, st, sg, load, ffi.NULL) == 0
+        out[k] = (s.motor.i_d_a, s.motor.i_q_a, s.motor.omega_m_rad_s, s.motor.theta_e_rad, s.vo_v)
     return out
 
 
 def _run_scipy(d, states, seg, x0, load, imposed=0):
-    x = np.array(list(x0.values()), dtype=float)
+    x = np.array([x0["i_d"], x0["i_q"], x0["w"], x0["th"], x0["vo"]], dtype=float)
     out = np.zeros((len(states), 5))
     for k in range(len(states)):
         for st, dur in zip(states[k], seg[k]):
-            if dur <= 0:
-                continue
-            sol = solve_ivp(_rhs(d, st, load, imposed), (0.0, dur), x, method="DOP853",
-                            rtol=1e-11, atol=1e-13)
-            assert sol.success
-            x = sol.y[:, -1]
+            if dur > 0:
+                x = integrate(_rhs(d, st, load, imposed), x, dur)
         out[k] = x
     return out
 
 
-def _phase(x):
-    i_d, i_q, th = x[:, 0], x[:, 1], x[:, 3]
-    ial = i_d * np.cos(th) - i_q * np.sin(th)
-    ibe = i_d * np.sin(th) + i_q * np.cos(th)
-    return ial, -0.5 * ial + math.sqrt(3) / 2 * ibe
+def _state(ffi, i_d, i_q, th=0.0, vo=0.0, w=0.0):
+    return ffi.new("ttype_plant_state_t *", {"motor": {"i_d_a": i_d, "i_q_a": i_q, "omega_m_rad_s": w,
+                                                       "theta_e_rad": th}, "vo_v": vo})
 
 
-X0 = {"i_d_a": -1.0, "i_q_a": 3.0, "omega_m_rad_s": 150.0, "theta_e_rad": 1.0, "vo_v": 0.5}
+def _values(s):
+    return (s.motor.i_d_a, s.motor.i_q_a, s.motor.omega_m_rad_s, s.motor.theta_e_rad, s.vo_v)
+
+
+X0 = {"i_d": -1.0, "i_q": 3.0, "w": 150.0, "th": 1.0, "vo": 0.5}
 
 
 @pytest.mark.parametrize("motor,imposed", [(SEED000, 0), (IPM, 0), (SEED000, 1)],
                          ids=["spmsm", "ipmsm", "spmsm-speed-imposed"])
-def test_plant_matches_scipy_dop853(stub3, motor, imposed):
-    ffi, lib, _ = stub3
+def test_plant_matches_scipy_dop853(stub, motor, imposed):
+    ffi, lib, _ = stub
     states, seg = _segments()
     c = _run_c(ffi, lib, motor, states, seg, X0, 0.8, imposed=imposed)
     ref = _run_scipy(motor, states, seg, X0, 0.8, imposed)
-    ia_c, ib_c = _phase(c)
-    ia_r, ib_r = _phase(ref)
-    assert max(np.max(np.abs(ia_c - ia_r)), np.max(np.abs(ib_c - ib_r))) < 1e-6
-    assert np.max(np.abs(c[:, :2] - ref[:, :2])) < 1e-6
-    assert np.max(np.abs(c[:, 4] - ref[:, 4])) < 1e-6  # V_o
-    assert np.max(np.abs(c[:, 2] - ref[:, 2])) < 1e-6
-    assert np.max(np.abs(np.angle(np.exp(1j * (c[:, 3] - ref[:, 3]))))) < 1e-9
-    assert np.all((c[:, 3] >= 0) & (c[:, 3] < 2 * np.pi))
+    assert_matches(c, ref, extra_cols=1)  # V_o too
+    ia_c, _ = phase_currents(c)
     # not vacuous: currents moved by amperes, V_o by volts
     assert np.ptp(ia_c) > 2.0 and np.ptp(c[:, 4]) > 0.2
     if imposed:
@@ -132,39 +125,34 @@ def test_plant_matches_scipy_dop853(stub3, motor, imposed):
 
 
 @pytest.mark.parametrize("motor", [SEED000, IPM], ids=["spmsm", "ipmsm"])
-def test_rk4_convergence_halving_substep(stub3, motor):
-    ffi, lib, _ = stub3
+def test_rk4_convergence_halving_substep(stub, motor):
+    ffi, lib, _ = stub
     states, seg = _segments(11)
     c1 = _run_c(ffi, lib, motor, states, seg, X0, 0.5, 1e-6)
     c05 = _run_c(ffi, lib, motor, states, seg, X0, 0.5, 0.5e-6)
-    ia1, ib1 = _phase(c1)
-    ia05, ib05 = _phase(c05)
+    ia1, ib1 = phase_currents(c1)
+    ia05, ib05 = phase_currents(c05)
     assert max(np.max(np.abs(ia1 - ia05)), np.max(np.abs(ib1 - ib05))) < 1e-6
     assert np.max(np.abs(c1[:, 4] - c05[:, 4])) < 1e-6
     # 4th order: coarse sub-steps (where rounding does not hide it) cut the error ~16x per halving
     e8 = np.max(np.abs(_run_c(ffi, lib, motor, states, seg, X0, 0.5, 8e-6)[:, :2] - c05[:, :2]))
     e4 = np.max(np.abs(_run_c(ffi, lib, motor, states, seg, X0, 0.5, 4e-6)[:, :2] - c05[:, :2]))
-    assert 8.0 < e8 / e4 < 24.0, (e8, e4)
+    assert_fourth_order(e8, e4, 8.0)
 
 
-def _state(ffi, i_d, i_q, th=0.0, vo=0.0, w=0.0):
-    return ffi.new("plant3l_state_t *", {"i_d_a": i_d, "i_q_a": i_q, "omega_m_rad_s": w,
-                                         "theta_e_rad": th, "vo_v": vo})
-
-
-def test_vo_sign_convention(stub3):
+def test_vo_sign_convention(stub):
     """P-type small POO with i_a > 0: i_o = i_b + i_c = -i_a < 0, so V_o falls
     (dV_o/dt = i_o/(2C)); its N-type partner ONN (i_o = i_a) raises V_o."""
-    ffi, lib, _ = stub3
-    p = _params(ffi, SEED000)
+    ffi, lib, _ = stub
+    p = _params(ffi, SEED000, imposed=1)
     dt = 2e-6
     for st, sign in ((POO, -1.0), (ONN, +1.0), (OOO, 0.0)):
         s = _state(ffi, 5.0, 0.0)  # theta = 0: i_a = i_d = 5 A, i_b = i_c = -2.5 A
         ia, ib = ffi.new("double *"), ffi.new("double *")
-        lib.plant3l_phase_currents(s, ia, ib)
+        lib.pmsm_dq_phase_currents(s.motor.i_d_a, s.motor.i_q_a, s.motor.theta_e_rad, ia, ib)
         assert ia[0] == pytest.approx(5.0) and ib[0] == pytest.approx(-2.5)
-        assert lib.plant3l_io(s, st) == pytest.approx(sign * 5.0, abs=1e-12)
-        assert lib.plant3l_advance(s, p, st, 0.0, dt, 2, 1) == 0
+        assert lib.ttype_plant_io(s, st) == pytest.approx(sign * 5.0, abs=1e-12)
+        assert lib.ttype_plant_advance(s, p, st, 0.0, dt, 2) == 0
         expected = sign * 5.0 * dt / (2 * SEED000["c_f"])  # ~ +-5 mV
         if sign == 0.0:
             assert s.vo_v == 0.0
@@ -173,51 +161,50 @@ def test_vo_sign_convention(stub3):
             assert math.copysign(1.0, s.vo_v) == sign
 
 
-def test_voltages_and_helpers(stub3):
-    ffi, lib, _ = stub3
+def test_voltages_and_helpers(stub):
+    ffi, lib, _ = stub
     p = _params(ffi, SEED000)
     udc = SEED000["udc_v"]
     lv = ffi.new("int[3]")
     for st in range(27):
-        assert lib.plant3l_levels(st, lv) == 0 and tuple(lv) == _levels(st)
-    assert lib.plant3l_levels(27, lv) == -1
+        assert lib.ttype_plant_levels(st, lv) == 0 and tuple(lv) == _levels(st)
+    assert lib.ttype_plant_levels(27, lv) == -1
     ua, ub = ffi.new("double *"), ffi.new("double *")
     # magnitudes at V_o = 0: small Udc/3, medium Udc/sqrt3, large 2Udc/3 (spec)
     for st, mag in ((POO, udc / 3), (ONN, udc / 3), (9 * 2 + 3 * 1 + 0, udc / math.sqrt(3)),
                     (9 * 2 + 0 + 0, 2 * udc / 3), (OOO, 0.0), (0, 0.0), (26, 0.0)):
-        lib.plant3l_voltage_ab(p, st, 0.0, ua, ub)
+        lib.ttype_plant_voltage_ab(p, st, 0.0, ua, ub)
         assert math.hypot(ua[0], ub[0]) == pytest.approx(mag, abs=1e-12)
     # with V_o: u_c1 = Udc/2 + V_o -> POO = (2/3) u_c1, ONN = (2/3) u_c2
-    lib.plant3l_voltage_ab(p, POO, 3.0, ua, ub)
+    lib.ttype_plant_voltage_ab(p, POO, 3.0, ua, ub)
     assert ua[0] == pytest.approx(2 / 3 * (udc / 2 + 3.0)) and ub[0] == pytest.approx(0.0, abs=1e-12)
-    lib.plant3l_voltage_ab(p, ONN, 3.0, ua, ub)
+    lib.ttype_plant_voltage_ab(p, ONN, 3.0, ua, ub)
     assert ua[0] == pytest.approx(2 / 3 * (udc / 2 - 3.0))
     # line voltage u_ab = u_ao - u_bo
-    assert lib.plant3l_uab(p, 9 * 2 + 0 + 0, 3.0) == pytest.approx(udc)      # PNN
-    assert lib.plant3l_uab(p, 9 * 0 + 3 * 2 + 0, 3.0) == pytest.approx(-udc)  # NPN
-    assert lib.plant3l_uab(p, POO, 3.0) == pytest.approx(udc / 2 + 3.0)      # u_c1
-    assert lib.plant3l_uab(p, 9 * 1 + 0 + 1, 3.0) == pytest.approx(udc / 2 - 3.0)  # ONO: u_c2
-    assert lib.plant3l_uab(p, OOO, 3.0) == 0.0
+    assert lib.ttype_plant_uab(p, 9 * 2 + 0 + 0, 3.0) == pytest.approx(udc)      # PNN
+    assert lib.ttype_plant_uab(p, 9 * 0 + 3 * 2 + 0, 3.0) == pytest.approx(-udc)  # NPN
+    assert lib.ttype_plant_uab(p, POO, 3.0) == pytest.approx(udc / 2 + 3.0)      # u_c1
+    assert lib.ttype_plant_uab(p, 9 * 1 + 0 + 1, 3.0) == pytest.approx(udc / 2 - 3.0)  # ONO: u_c2
+    assert lib.ttype_plant_uab(p, OOO, 3.0) == 0.0
 
 
-def test_segments_skip_empty_and_reject_bad_input(stub3):
-    ffi, lib, _ = stub3
+def test_segments_skip_empty_and_reject_bad_input(stub):
+    ffi, lib, _ = stub
     p = _params(ffi, SEED000)
     a = _state(ffi, 1.0, 2.0, 0.3, 0.1, 100.0)
     b = _state(ffi, 1.0, 2.0, 0.3, 0.1, 100.0)
-    st = ffi.new("unsigned short[7]", [POO, 5, 5, 5, 5, 5, 5])
+    st = ffi.new("uint16_t[7]", [POO, 5, 5, 5, 5, 5, 5])
     sg = ffi.new("double[7]", [TS, 0, 0, 0, 0, 0, 0])
     uab = ffi.new("double[7]")
-    assert lib.plant3l_advance_segments(a, p, st, sg, 0.2, 1e-6, 0, uab) == 0
-    assert lib.plant3l_advance(b, p, POO, 0.2, TS, 50, 0) == 0
-    assert (a.i_d_a, a.i_q_a, a.omega_m_rad_s, a.theta_e_rad, a.vo_v) == \
-           (b.i_d_a, b.i_q_a, b.omega_m_rad_s, b.theta_e_rad, b.vo_v)
+    assert lib.ttype_plant_advance_segments(a, p, st, sg, 0.2, uab) == 0
+    assert lib.ttype_plant_advance(b, p, POO, 0.2, TS, 50) == 0
+    assert _values(a) == _values(b)
     assert uab[0] == pytest.approx(110.0 + 0.1)
-    before = (a.i_d_a, a.i_q_a, a.omega_m_rad_s, a.theta_e_rad, a.vo_v)
+    before = _values(a)
     for bad_st, bad_sg, sub in (([27] * 7, [TS] + [0] * 6, 1e-6), ([13] * 7, [-1e-6] + [TS] * 6, 1e-6),
                                 ([13] * 7, [float("nan")] * 7, 1e-6), ([13] * 7, [TS] + [0] * 6, 0.0)):
-        assert lib.plant3l_advance_segments(a, p, ffi.new("unsigned short[7]", bad_st),
-                                            ffi.new("double[7]", bad_sg), 0.0, sub, 0, ffi.NULL) == -1
-    assert (a.i_d_a, a.i_q_a, a.omega_m_rad_s, a.theta_e_rad, a.vo_v) == before
-    assert lib.plant3l_advance(a, p, 27, 0.0, TS, 50, 0) == -1
-    assert lib.plant3l_advance(a, p, 13, 0.0, TS, 0, 0) == -1
+        assert lib.ttype_plant_advance_segments(a, _params(ffi, SEED000, sub), ffi.new("uint16_t[7]", bad_st),
+                                                ffi.new("double[7]", bad_sg), 0.0, ffi.NULL) == -1
+    assert _values(a) == before
+    assert lib.ttype_plant_advance(a, p, 27, 0.0, TS, 50) == -1
+    assert lib.ttype_plant_advance(a, p, 13, 0.0, TS, 0) == -1

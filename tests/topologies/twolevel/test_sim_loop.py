@@ -1,4 +1,4 @@
-"""Closed loop (firmware/runtime/sim2l.c + codegen/simulate.py) with the stub controller."""
+"""Two-level closed loop (csrc/twolevel_sim.c + codegen/topologies/twolevel/sim.py) with the stub controller."""
 from __future__ import annotations
 
 import dataclasses
@@ -12,6 +12,7 @@ from codegen.metrics import steady_windows, window_slice
 from codegen.simulator.driver import SimulationError, default_substeps, n_periods, scenario_arrays
 from codegen.topologies.twolevel.records import INPUT_DTYPE
 from codegen.topologies.twolevel.sim import Trace, controller_inputs, params_from_model, run_closed_loop
+from tests.fixtures.simbuild import assert_traces_identical
 
 RPM = 2 * math.pi / 60
 
@@ -22,9 +23,9 @@ def _short(model, duration_s=0.3, **ctrl):
 
 
 @pytest.fixture(scope="module")
-def full_run(stub_lib, spmsm_model):
-    ffi, lib = stub_lib
-    lib.stub_set_echo(0)
+def full_run(stub, spmsm_model):
+    ffi, lib = stub
+    lib.stub_twolevel_set_echo(0)
     calls = []
     t = time.perf_counter()
     tr = run_closed_loop(ffi, lib, spmsm_model, progress=calls.append)
@@ -42,11 +43,12 @@ def test_scenario_arrays_spmsm(spmsm_model):
     assert default_substeps(62.5e-6) == 63
 
 
-def test_params_from_model(stub_lib, spmsm_model):
-    ffi, _ = stub_lib
+def test_params_from_model(stub, spmsm_model):
+    ffi, _ = stub
     p = params_from_model(ffi, spmsm_model)
-    assert (p.rs_ohm, p.ld_h, p.pole_pairs, p.udc_v, p.dt_s, p.substeps) == (0.2, 8.5e-3, 4, 312.0, 50e-6, 50)
-    assert (p.kp, p.ki, p.limit_nm, p.speed_imposed, p.delay_compensation) == (5.0, 10.0, 30.0, 0, 0)
+    c = p.common
+    assert (c.rs_ohm, c.ld_h, c.pole_pairs, c.udc_v, c.dt_s, p.substeps) == (0.2, 8.5e-3, 4, 312.0, 50e-6, 50)
+    assert (c.kp, c.ki, c.limit_nm, c.speed_imposed, p.delay_compensation) == (5.0, 10.0, 30.0, 0, 0)
 
 
 def test_full_scenario_follows_reference(full_run, spmsm_model):
@@ -74,24 +76,18 @@ def test_full_scenario_follows_reference(full_run, spmsm_model):
     assert elapsed < 20.0  # "must not take minutes"
 
 
-def test_chunked_equals_one_long_run(stub_lib, spmsm_model, full_run):
-    ffi, lib = stub_lib
-    lib.stub_set_echo(0)
+def test_chunked_equals_one_long_run(stub, spmsm_model, full_run):
+    ffi, lib = stub
+    lib.stub_twolevel_set_echo(0)
     tr = full_run[0]
     one = run_closed_loop(ffi, lib, spmsm_model, chunk=80_000)
     odd = run_closed_loop(ffi, lib, spmsm_model, chunk=7_777)
-    for f in dataclasses.fields(Trace):
-        a, b, c = getattr(tr, f.name), getattr(one, f.name), getattr(odd, f.name)
-        if f.name == "dt_s":
-            assert a == b == c
-            continue
-        assert a.dtype == b.dtype == c.dtype
-        assert a.tobytes() == b.tobytes() == c.tobytes(), f.name  # bit for bit
+    assert_traces_identical(tr, one, odd)
 
 
-def test_delay_compensation_timing(stub_lib, spmsm_model):
-    ffi, lib = stub_lib
-    lib.stub_set_echo(4)  # te_est_nm = prev_sw as the step saw it
+def test_delay_compensation_timing(stub, spmsm_model):
+    ffi, lib = stub
+    lib.stub_twolevel_set_echo(4)  # te_est_nm = prev_sw as the step saw it
     try:
         for dc in (False, True):
             tr = run_closed_loop(ffi, lib, _short(spmsm_model, 0.05, delay_compensation=dc))
@@ -103,29 +99,29 @@ def test_delay_compensation_timing(stub_lib, spmsm_model):
                 np.testing.assert_array_equal(tr.applied_sw, tr.sw)
             assert len(set(tr.sw.tolist())) > 3
     finally:
-        lib.stub_set_echo(0)
+        lib.stub_twolevel_set_echo(0)
 
 
 @pytest.mark.parametrize("mode,fields", [(1, ("torque_ref_nm", "omega_e_rad_s")),
                                          (2, ("ia_a", "ib_a")),
                                          (3, ("theta_e_rad", "udc_v"))])
-def test_controller_inputs_are_what_the_step_saw(stub_lib, spmsm_model, mode, fields):
-    ffi, lib = stub_lib
+def test_controller_inputs_are_what_the_step_saw(stub, spmsm_model, mode, fields):
+    ffi, lib = stub
     model = _short(spmsm_model, 0.1)
-    lib.stub_set_echo(mode)
+    lib.stub_twolevel_set_echo(mode)
     try:
         tr = run_closed_loop(ffi, lib, model)
     finally:
-        lib.stub_set_echo(0)
+        lib.stub_twolevel_set_echo(0)
     rec = controller_inputs(tr, model)
     assert rec.dtype == INPUT_DTYPE and rec.shape == (tr.n,)
     assert rec[fields[0]].tobytes() == tr.te_est_nm.tobytes()
     assert rec[fields[1]].tobytes() == tr.psi_est_wb.tobytes()
 
 
-def test_speed_imposed(stub_lib, spmsm_model):
-    ffi, lib = stub_lib
-    lib.stub_set_echo(0)
+def test_speed_imposed(stub, spmsm_model):
+    ffi, lib = stub
+    lib.stub_twolevel_set_echo(0)
     model = _short(spmsm_model, 0.2).replace(
         scenario=dataclasses.replace(spmsm_model.scenario, duration_s=0.2, speed_mode="imposed",
                                      load_nm=((0.0, 5.0), (0.1, -5.0))))
@@ -136,42 +132,29 @@ def test_speed_imposed(stub_lib, spmsm_model):
     assert abs(np.mean(tr.te_nm[3000:4000]) + 5.0) < 0.5
 
 
-def test_bad_parameters_raise(stub_lib, spmsm_model):
-    ffi, lib = stub_lib
+def test_bad_parameters_raise(stub, spmsm_model):
+    ffi, lib = stub
     bad = spmsm_model.replace(motor=dataclasses.replace(spmsm_model.motor, j_kgm2=0.0))
     with pytest.raises(SimulationError, match="invalid simulator arguments"):
         run_closed_loop(ffi, lib, bad)
     p = params_from_model(ffi, spmsm_model)
-    st = ffi.new("sim2l_state_t *")
-    assert lib.sim2l_init(p, st) == 0
+    st = ffi.new("twolevel_sim_state_t *")
+    assert lib.twolevel_sim_init(p, st) == 0
     st.prev_sw = 9
     ref = ffi.new("double[1]", [0.0])
-    assert lib.sim2l_run(p, ref, ref, 1, ffi.NULL, st) == -1
+    assert lib.twolevel_sim_run(p, ref, ref, 1, ffi.NULL, st) == -1
     st.prev_sw = 0
-    assert lib.sim2l_run(p, ref, ref, 1, ffi.NULL, st) == 0  # NULL trace: nothing recorded
-    assert st.k == 1
+    assert lib.twolevel_sim_run(p, ref, ref, 1, ffi.NULL, st) == 0  # NULL trace: nothing recorded
+    assert st.common.k == 1
 
 
-def test_divergence_is_reported(stub_lib, spmsm_model):
-    ffi, lib = stub_lib
+def test_divergence_is_reported(stub, spmsm_model):
+    ffi, lib = stub
     p = params_from_model(ffi, spmsm_model)
-    st = ffi.new("sim2l_state_t *")
-    assert lib.sim2l_init(p, st) == 0
-    st.i_d_a = float("inf")
+    st = ffi.new("twolevel_sim_state_t *")
+    assert lib.twolevel_sim_init(p, st) == 0
+    st.common.motor.i_d_a = float("inf")
     ref = ffi.new("double[3]", [0.0, 0.0, 0.0])
-    assert lib.sim2l_run(p, ref, ref, 3, ffi.NULL, st) == -2
-    assert st.k == 0
+    assert lib.twolevel_sim_run(p, ref, ref, 3, ffi.NULL, st) == -2
+    assert st.common.k == 0
 
-
-def test_api_header_is_plain_cdef():
-    """sim2l_api.h goes to ffi.cdef as is: no preprocessor lines, parses alone."""
-    import cffi
-
-    from tests.fixtures.stubbuild import RUNTIME
-
-    text = (RUNTIME / "sim2l_api.h").read_text()
-    assert not any(line.lstrip().startswith("#") for line in text.splitlines())
-    ffi = cffi.FFI()
-    ffi.cdef(text)
-    for name in ("sim2l_params_t", "sim2l_state_t", "sim2l_trace_t"):
-        assert ffi.sizeof(name) > 0

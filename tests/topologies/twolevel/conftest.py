@@ -11,9 +11,16 @@ from pathlib import Path
 import pytest
 
 from codegen.model import Controller, Derivation, Inverter, Model, Motor, Scenario, SpeedLoop
-from tests.fixtures.stubbuild import build_stub_library
+from codegen.topologies.twolevel.sim import SIM
+from tests.fixtures.simbuild import build_stub_library
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
+
+STUB_CDEF = """
+void stub_twolevel_set_params(float ld_h, float lq_h, float psi_f_wb, int pole_pairs,
+                              float psi_ref_wb, float band_nm);
+void stub_twolevel_set_echo(int mode);
+"""
 
 
 def model_from_toml(path: Path) -> Model:
@@ -42,6 +49,6 @@ def spmsm_model() -> Model:
 
 
 @pytest.fixture(scope="session")
-def stub_lib(tmp_path_factory):
-    """(ffi, lib): plant2l + sim2l + stub controller, strict flags, cffi ABI mode."""
-    return build_stub_library(tmp_path_factory.mktemp("stub_build"))
+def stub(tmp_path_factory):
+    """(ffi, lib): the two-level simulator + stub controller, strict flags, cffi ABI mode."""
+    return build_stub_library(SIM, STUB_CDEF, tmp_path_factory.mktemp("stub_build"))

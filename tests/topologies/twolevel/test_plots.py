@@ -7,9 +7,9 @@ from codegen.topologies.twolevel.plots import plot_two_level
 from codegen.topologies.twolevel.sim import run_closed_loop
 
 
-def test_plots_write_pngs(stub_lib, spmsm_model, tmp_path):
-    ffi, lib = stub_lib
-    lib.stub_set_echo(0)
+def test_plots_write_pngs(stub, spmsm_model, tmp_path):
+    ffi, lib = stub
+    lib.stub_twolevel_set_echo(0)
     model = spmsm_model.replace(
         scenario=dataclasses.replace(spmsm_model.scenario, duration_s=0.6,
                                      load_nm=((0.0, 10.0), (0.3, -10.0))))
@@ -22,9 +22,9 @@ def test_plots_write_pngs(stub_lib, spmsm_model, tmp_path):
         assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 5_000, p
 
 
-def test_plots_without_running_window(stub_lib, spmsm_model, tmp_path):
-    ffi, lib = stub_lib
-    lib.stub_set_echo(0)
+def test_plots_without_running_window(stub, spmsm_model, tmp_path):
+    ffi, lib = stub
+    lib.stub_twolevel_set_echo(0)
     model = spmsm_model.replace(
         scenario=dataclasses.replace(spmsm_model.scenario, duration_s=0.1, speed_ref_rpm=((0.0, 0.0),)))
     tr = run_closed_loop(ffi, lib, model)

@@ -108,11 +108,11 @@ def test_steady_windows_spmsm(spmsm_model):
     assert mask.sum() == 16_000 and mask[76_000] and not mask[75_999] and mask[-1]
 
 
-def test_two_level_metrics_keys_and_windows(stub_lib, spmsm_model):
+def test_two_level_metrics_keys_and_windows(stub, spmsm_model):
     from codegen.topologies.twolevel.sim import run_closed_loop
 
-    ffi, lib = stub_lib
-    lib.stub_set_echo(0)
+    ffi, lib = stub
+    lib.stub_twolevel_set_echo(0)
     tr = run_closed_loop(ffi, lib, spmsm_model)
     r = two_level_metrics(tr, spmsm_model)
     for k in ("T_rip_RMSE", "psi_rip_RMSE", "T_rip_std", "T_rip_pp", "psi_rip_std", "psi_rip_pp",

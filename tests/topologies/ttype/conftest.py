@@ -3,50 +3,24 @@
 The model is built directly from the parameters of shared/spec/mpdtc-three-level.md
 ("Parameters and scenarios", Table 4) -- these tests exercise the simulator,
 not the config loader.  The controller is the stub of
-tests/fixtures/stub_mpc3 (a nearest-voltage rule), not the product's MPDTC.
+tests/fixtures/stub_ttype (a nearest-voltage rule), not the product's MPDTC.
 """
 from __future__ import annotations
 
-import subprocess
-from pathlib import Path
-
-import cffi
 import numpy as np
 import pytest
 
 from codegen.model import Controller, Inverter, Model, Motor, Scenario, SpeedLoop
-from codegen.simulator.driver import CSRC as SHARED_CSRC
-from codegen.topologies.ttype.sim import RUNTIME, RUNTIME_SOURCES, runtime_cdef
+from codegen.topologies.ttype.sim import SIM
 from codegen.topologies.ttype.virtual import VIRTUAL
+from tests.fixtures.simbuild import build_stub_library
 
-ROOT = Path(__file__).resolve().parents[2]
-STUB3 = ROOT / "tests" / "fixtures" / "stub_mpc3"
-
-CFLAGS = [
-    "-std=c99", "-O2", "-Wall", "-Wextra", "-Wconversion", "-Wdouble-promotion",
-    "-Werror", "-ffp-contract=off",
-]
-
-STUB3_CDEF = """
-void stub3_set_params(float rs_ohm, float ls_h, float psi_f_wb, int pole_pairs,
-                      float ts_s, float c_f);
-void stub3_set_virtual(const unsigned short *seq, int enable);
-void stub3_set_echo(int mode);
+STUB_CDEF = """
+void stub_ttype_set_params(float rs_ohm, float ls_h, float psi_f_wb, int pole_pairs,
+                           float ts_s, float c_f);
+void stub_ttype_set_virtual(const unsigned short *seq, int enable);
+void stub_ttype_set_echo(int mode);
 """
-
-
-def build_stub3_library(tmpdir: Path):
-    """plant3l + sim3l + stub controller, strict flags, cffi ABI mode."""
-    out = Path(tmpdir) / "libsim3l_stub.so"
-    sources = [*RUNTIME_SOURCES, STUB3 / "stub_mpc3.c"]
-    cmd = ["gcc", *CFLAGS, "-fPIC", "-shared", f"-I{RUNTIME}", f"-I{SHARED_CSRC}", f"-I{STUB3}",
-           *map(str, sources), "-o", str(out), "-lm"]
-    proc = subprocess.run(cmd, capture_output=True, text=True)
-    if proc.returncode != 0 or proc.stderr.strip():
-        raise RuntimeError(f"stub3 build failed:\n{' '.join(cmd)}\n{proc.stderr}")
-    ffi = cffi.FFI()
-    ffi.cdef(runtime_cdef() + STUB3_CDEF)
-    return ffi, ffi.dlopen(str(out))
 
 
 def seed000_model(speed_rpm: float = 1800.0, duration_s: float = 0.3, load_nm: float = 1.27,
@@ -54,7 +28,7 @@ def seed000_model(speed_rpm: float = 1800.0, duration_s: float = 0.3, load_nm: f
     return Model(
         name="seed000_tt3l",
         prefix="mpc3",
-        source="tests/sim3l (seed 000 parameters)",
+        source="tests/topologies/ttype (seed 000 parameters)",
         motor=Motor(rs_ohm=1.75, ld_h=1.6e-3, lq_h=1.6e-3, psi_f_wb=0.045, pole_pairs=5,
                     rated_speed_rpm=3000.0, rated_torque_nm=1.27, j_kgm2=5e-4, b_nms=0.0),
         inverter=Inverter(topology="t-type", udc_v=220.0, udc_min_v=150.0, udc_max_v=300.0,
@@ -69,14 +43,14 @@ def seed000_model(speed_rpm: float = 1800.0, duration_s: float = 0.3, load_nm: f
 
 
 @pytest.fixture(scope="session")
-def stub3(tmp_path_factory):
-    ffi, lib = build_stub3_library(tmp_path_factory.mktemp("stub3_build"))
-    lib.stub3_set_params(1.75, 1.6e-3, 0.045, 5, 50e-6, 1000e-6)
+def stub(tmp_path_factory):
+    ffi, lib = build_stub_library(SIM, STUB_CDEF, tmp_path_factory.mktemp("stub_ttype_build"))
+    lib.stub_ttype_set_params(1.75, 1.6e-3, 0.045, 5, 50e-6, 1000e-6)
     seq = np.array([vv.sequence for vv in VIRTUAL], dtype=np.uint16).ravel()
     buf = ffi.new("unsigned short[]", seq.tolist())
 
     def set_mode(mode: int) -> None:
-        lib.stub3_set_virtual(buf, 1 if mode == 63 else 0)
+        lib.stub_ttype_set_virtual(buf, 1 if mode == 63 else 0)
 
     set_mode(27)
     return ffi, lib, set_mode

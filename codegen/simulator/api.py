@@ -1,0 +1,108 @@
+"""The closed-loop simulator of one topology: its records, C sources and generated API header.
+
+A :class:`SimApi` names what a topology's simulator consists of: the
+parameter, state and trace structs (:mod:`codegen.simulator.records`), its
+C sources, and its plant header.  At build time :func:`header_path` renders
+``sim_api.h`` from the structs through ``templates/sim/sim_api.h.j2`` into
+the build cache, so the C structs, the cffi cdef and the numpy side all
+derive from the same field lists.
+"""
+from __future__ import annotations
+
+import hashlib
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+from codegen import __version__
+from codegen.simulator.records import MOTOR_STATE, SIM_PARAMS, SIM_STATE, SIM_TRACE, SimStruct
+
+#: C sources of the shared dq model, RK4, speed PI and period steps (float64, host only).
+CSRC = Path(__file__).resolve().parent / "csrc"
+SHARED_SOURCES: tuple[Path, ...] = (CSRC / "pmsm_dq.c", CSRC / "speed_pi.c", CSRC / "sim_period.c")
+SHARED_HEADERS: tuple[Path, ...] = (CSRC / "pmsm_dq.h", CSRC / "pmsm_rk4.h", CSRC / "speed_pi.h",
+                                    CSRC / "sim_period.h")
+
+#: File name of the generated API header (the same for every topology: sim_period.h includes it).
+API_NAME = "sim_api.h"
+
+
+@dataclass(frozen=True)
+class SimApi:
+    """One topology's closed-loop simulator: C prefix, structs, sources, plant header."""
+
+    topology: str  # "twolevel" | "ttype"
+    params: SimStruct
+    state: SimStruct
+    trace: SimStruct
+    csrc: Path  # the topology's csrc/ directory
+    errors: dict[int, str]  # messages of the run's nonzero return codes
+
+    @property
+    def prefix(self) -> str:
+        """C prefix of the API functions and types (``<topology>_sim``)."""
+        return f"{self.topology}_sim"
+
+    @property
+    def plant_header(self) -> Path:
+        return self.csrc / f"{self.topology}_plant.h"
+
+    @property
+    def loop_source(self) -> Path:
+        return self.csrc / f"{self.topology}_sim.c"
+
+    @property
+    def sources(self) -> tuple[Path, ...]:
+        """Every C source of the simulator (shared first)."""
+        return (*SHARED_SOURCES, self.csrc / f"{self.topology}_plant.c", self.loop_source)
+
+
+def render_header(api: SimApi) -> str:
+    """The text of ``sim_api.h`` (cdef-ready: no preprocessor lines)."""
+    from codegen.render import environment
+
+    return environment().get_template("sim/sim_api.h.j2").render(
+        topology=api.topology, api=api.prefix, version=__version__,
+        loop_source=f"codegen/topologies/{api.topology}/csrc/{api.loop_source.name}",
+        motor_state=MOTOR_STATE, params_common=SIM_PARAMS, state_common=SIM_STATE,
+        trace_common=SIM_TRACE, params=api.params, state=api.state, trace=api.trace,
+    )
+
+
+def header_path(api: SimApi) -> Path:
+    """Render ``sim_api.h`` into the build cache (content-addressed); return its path."""
+    from codegen.hostbuild import cache_root
+
+    text = render_header(api)
+    key = hashlib.sha256(text.encode()).hexdigest()[:16]
+    path = cache_root() / "sim_api" / f"{api.topology}_{key}" / API_NAME
+    if not path.is_file() or path.read_text() != text:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_name(f"{API_NAME}.tmp{os.getpid()}")
+        tmp.write_text(text)
+        os.replace(tmp, path)  # atomic: parallel builds may race
+    return path
+
+
+def strip_preprocessor(text: str) -> str:
+    """``text`` without its preprocessor lines (for ffi.cdef)."""
+    return "\n".join(line for line in text.splitlines() if not line.lstrip().startswith("#"))
+
+
+def cdef(api: SimApi) -> str:
+    """cffi cdef of the simulator and its plant: sim_api.h + the plant header's declarations."""
+    return render_header(api) + "\n" + strip_preprocessor(api.plant_header.read_text()) + "\n"
+
+
+def sim_sources(api: SimApi):
+    """The :class:`~codegen.hostbuild.SimSources` of a host build (renders the header)."""
+    from codegen.hostbuild import SimSources
+
+    header = header_path(api)
+    headers = (*SHARED_HEADERS, api.plant_header, header)
+    return SimSources(header, api.sources, headers)
+
+
+def include_dirs(api: SimApi) -> list[Path]:
+    """Include directories of a build of the simulator (shared, topology, generated header)."""
+    return sorted({p.parent for p in (*api.sources, *SHARED_HEADERS, header_path(api))})

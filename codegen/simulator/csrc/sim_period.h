@@ -1,0 +1,106 @@
+/*
+ * sim_period.h -- the steps of one control period that every topology's
+ * closed-loop simulator shares (hand-written runtime, float64).
+ *
+ * Specification: shared/spec/plant-and-metrics.md ("Plant", "Sampling",
+ * "Timing") and shared/spec/mptc-two-level.md ("Parameters and scenarios":
+ * speed PI).  Structs: the generated sim_api.h (from the field lists of
+ * codegen/simulator/records.py), included here once per translation unit.
+ *
+ * One period k (t_k = k*dt_s) of every topology:
+ *  1. speed_imposed != 0: omega_m := speed_ref[k] (the load machine holds
+ *     the speed profile).                                    sim_period_sample
+ *  2. Sample the plant at t_k: i_a, i_b (inverse Park, inverse Clarke),
+ *     theta_e in [0, 2*pi), omega_e = p*omega_m.             sim_period_sample
+ *  3. Torque reference T*(k):                                sim_period_sample
+ *     speed_imposed == 0: speed PI (speed_pi.h) in double on the mechanical
+ *       speed error e = speed_ref[k] - omega_m (rad/s), T* clamped to
+ *       +-limit_nm with conditional-integration anti-windup;
+ *     speed_imposed != 0: the speed loop is open; T*(k) = load_nm[k], read
+ *       as the torque the drive must deliver against the load machine.
+ *  4. Controller step with the topology's inputs, every field cast to float
+ *     as a real controller sees them (the topology's sim .c).
+ *  5. Record the sample instant and the decision.  sim_period_record
+ *  6./7. The topology's timing rule and plant integration over [t_k, t_k+1),
+ *     load torque load_nm[k] (ignored when the speed is imposed).
+ *  Commit: the plant state, the PI integrator, k += 1.   sim_period_commit
+ *
+ * C99, no dynamic memory, no global state.  Not part of any cffi cdef.
+ */
+#ifndef SIM_PERIOD_H
+#define SIM_PERIOD_H
+
+#include <stdint.h>
+
+#include "sim_api.h"
+
+/* Values of steps 1-3 of one period. */
+typedef struct {
+    double w_ref;     /* speed_ref[k], rad/s */
+    double load;      /* load_nm[k], N*m */
+    double ia, ib;    /* sampled phase currents, A */
+    double th;        /* sampled electrical angle in [0, 2*pi), rad */
+    double omega_e;   /* p*omega_m, rad/s */
+    double t_ref;     /* T*, N*m */
+    double integral;  /* PI integrator after this period (committed with it), N*m */
+} sim_sample_t;
+
+/* Step 4, the controller inputs every topology fills alike: the motor
+ * measurements (codegen.records.MOTOR_INPUT_FIELDS) and T*, each cast to
+ * float as a real controller sees them.  `in` is the topology's mpc_input_t
+ * (a macro: the input type is the generated binding's), `v` a sim_sample_t. */
+#define SIM_PERIOD_MOTOR_INPUTS(in, v)              \
+    do {                                            \
+        (in).ia_a = (float)(v).ia;                  \
+        (in).ib_a = (float)(v).ib;                  \
+        (in).theta_e_rad = (float)(v).th;           \
+        (in).omega_e_rad_s = (float)(v).omega_e;    \
+        (in).torque_ref_nm = (float)(v).t_ref;      \
+    } while (0)
+
+/* Shared parameter checks (pmsm_dq_sim_params_valid); 1 valid, 0 not (p NULL: 0). */
+int sim_period_params_valid(const sim_params_t *p);
+
+/* Initial state: plant at rest, angle 0, PI integrator 0, k 0. */
+void sim_period_reset(sim_state_t *s);
+
+/* Shared run-argument checks: state, n >= 0, arrays given when n > 0, k >= 0. 1 valid. */
+int sim_period_args_valid(const sim_state_t *s, long n, const double *speed_ref_rad_s,
+                          const double *load_nm);
+
+/* Steps 1-3 on the plant motor state x (step 1 may set its speed). */
+void sim_period_sample(const sim_params_t *p, const sim_state_t *s, pmsm_state_t *x,
+                       double w_ref, double load, sim_sample_t *out);
+
+/* Step 5, shared trace members of period j: the sample instant (plant
+ * torque and flux of x) and the controller's vector, n_eval, fault and
+ * estimates. */
+void sim_period_record(const sim_trace_t *tr, long j, const sim_params_t *p, const sim_state_t *s,
+                       const pmsm_state_t *x, const sim_sample_t *v, uint16_t vector,
+                       uint16_t n_eval, uint16_t fault, float te_est_nm, float psi_est_wb);
+
+/* 1 if every motor state value is finite. */
+int sim_period_finite(const pmsm_state_t *x);
+
+/* The motor state as the first four entries of an RK4 state vector
+ * (pmsm_rk4.h: i_d, i_q, omega_m, theta_e), and back. */
+static inline void sim_period_motor_load(const pmsm_state_t *s, double *x)
+{
+    x[0] = s->i_d_a;
+    x[1] = s->i_q_a;
+    x[2] = s->omega_m_rad_s;
+    x[3] = s->theta_e_rad;
+}
+
+static inline void sim_period_motor_store(pmsm_state_t *s, const double *x)
+{
+    s->i_d_a = x[0];
+    s->i_q_a = x[1];
+    s->omega_m_rad_s = x[2];
+    s->theta_e_rad = x[3];
+}
+
+/* Commit period k: plant motor state, PI integrator, k += 1. */
+void sim_period_commit(sim_state_t *s, const pmsm_state_t *x, double integral);
+
+#endif /* SIM_PERIOD_H */

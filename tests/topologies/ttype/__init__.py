@@ -1,0 +1,1 @@
+"""T-type topology tests: closed-loop simulator, plant, metrics, plots."""

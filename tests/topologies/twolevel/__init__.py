@@ -1,0 +1,1 @@
+"""Two-level topology tests: closed-loop simulator, plant, metrics, plots, tables."""
