@@ -1,7 +1,16 @@
-"""Shared fixtures: example configs, tables per strategy, host builds."""
+"""Shared fixtures: example configs, tables per strategy, host builds, strict C checks.
+
+Test modules import these names with ``from conftest import ...``: pytest puts
+this folder on ``sys.path`` (rootdir conftest, default "prepend" import mode),
+so the tests in sub-folders (tests/stages, tests/topologies/<name>) see it too.
+Test folders have no ``__init__.py``: every test module's basename is unique.
+"""
 from __future__ import annotations
 
+import re
 import shutil
+import subprocess
+from collections.abc import Iterable
 from pathlib import Path
 
 import pytest
@@ -13,7 +22,18 @@ ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = ROOT / "examples"
 SPMSM = EXAMPLES / "seed001_spmsm.toml"
 IPMSM = EXAMPLES / "seed001_ipmsm.toml"
+#: the T-type example (its file name and C prefix "tlevel" are what user commands name)
+TTYPE = EXAMPLES / "seed000_tlevel.toml"
 TWO_LEVEL = ("conventional", "s1", "s2", "s3")
+TTYPE_STRATEGIES = ("mpdtc27", "mpdtc63")
+
+#: the strict warning set every generated C file must pass (host and target compilers)
+STRICT_WARN = ("-std=c99", "-O2", "-Wall", "-Wextra", "-Wconversion", "-Wdouble-promotion", "-Werror",
+               "-ffp-contract=off")
+#: Cortex-M7 (STM32H743) code generation flags
+M7_FLAGS = ("-mcpu=cortex-m7", "-mthumb", "-mfpu=fpv5-d16", "-mfloat-abi=hard", "-fno-math-errno")
+#: C spellings the C28x profile must not use (no 8-bit types, no double)
+C28X_FORBIDDEN = ("int8_t", "uint8_t", "double", "char ")
 
 
 def model_for(path: Path, **overrides: object) -> Model:
@@ -27,3 +47,35 @@ def require_tool(name: str, package: str) -> str:
     if path is None:
         pytest.fail(f"{name} not found: install the Debian package {package} (scripts/bootstrap.sh does)")
     return path
+
+
+def compile_strict(src: Path, obj: Path, compiler: Iterable[str] = ("gcc",)) -> None:
+    """Compile ``src`` to ``obj`` under the strict warning set; fail with the compiler's messages."""
+    r = subprocess.run([*compiler, *STRICT_WARN, "-c", str(src), "-o", str(obj)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+
+
+def compile_m7(src: Path, obj: Path) -> None:
+    """Compile ``src`` strictly for the Cortex-M7 and check the ITCM/DTCM placement sections."""
+    arm = require_tool("arm-none-eabi-gcc", "gcc-arm-none-eabi")
+    compile_strict(src, obj, (arm, *M7_FLAGS))
+    sections = subprocess.run(["arm-none-eabi-objdump", "-h", str(obj)], capture_output=True, text=True).stdout
+    assert ".itcm_text" in sections and ".dtcm_rodata" in sections
+
+
+def assert_c28x_clean(name: str, text: str) -> None:
+    """The C code of ``text`` (comments removed) uses no spelling the C28x profile forbids."""
+    code = re.sub(r"/\*.*?\*/", "", text, flags=re.S)
+    for bad in C28X_FORBIDDEN:
+        assert bad not in code, f"{name} uses {bad}"
+
+
+def assert_symbols_prefixed(src: Path, obj: Path, prefix: str) -> None:
+    """Every symbol ``src`` defines (text, data, rodata, bss) starts with ``prefix_``."""
+    subprocess.run(["gcc", "-std=c99", "-O2", "-c", str(src), "-o", str(obj)], check=True)
+    nm = subprocess.run(["nm", str(obj)], capture_output=True, text=True, check=True).stdout
+    names = [p[-1] for p in (line.split() for line in nm.splitlines())
+             if len(p) >= 2 and p[-2] in "TtDdRrBb" and not p[-1].startswith(".")]
+    assert names, f"{src.name} defines no symbol"
+    bad = [n for n in names if not n.startswith(prefix + "_")]
+    assert not bad, bad

@@ -130,7 +130,7 @@ def test_optional_fields_and_sections_take_model_defaults(tmp_path: Path) -> Non
     assert m.target == "host"
 
 
-def test_valid_three_level_config(tmp_path: Path) -> None:
+def test_valid_ttype_config(tmp_path: Path) -> None:
     path = write_config(tmp_path, {
         "inverter.topology": "t-type", "controller.strategy": "mpdtc63",
         "controller.t_n_min_s": 50e-6 / 6, "inverter.c_f": 2.2e-3,
@@ -292,9 +292,9 @@ INVALID = [
      "must be one of conventional, s1, s2, s3, mpdtc27, mpdtc63"),
     ("two-level-strategy-on-t-type", SPMSM, {"inverter.topology": "t-type"}, "controller.strategy",
      "'conventional'", "needs inverter.topology = 'two-level' but inverter.topology = 't-type'"),
-    ("three-level-strategy-on-two-level", SPMSM, {"controller.strategy": "mpdtc27"}, "controller.strategy",
+    ("t-type-strategy-on-two-level", SPMSM, {"controller.strategy": "mpdtc27"}, "controller.strategy",
      "'mpdtc27'", "needs inverter.topology = 't-type' but inverter.topology = 'two-level'"),
-    ("three-level-on-ipmsm", IPMSM, {"controller.strategy": "mpdtc63", "inverter.topology": "t-type"},
+    ("t-type-on-ipmsm", IPMSM, {"controller.strategy": "mpdtc63", "inverter.topology": "t-type"},
      "controller.strategy", "'mpdtc63'", "needs Ld == Lq"),
     ("unknown-topology", SPMSM, {"inverter.topology": "three-level"},
      "inverter.topology", "'three-level'", "two-level, t-type"),

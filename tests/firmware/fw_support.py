@@ -26,7 +26,7 @@ from codegen.topology import topology_of
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLES = {"spmsm": ROOT / "examples" / "seed001_spmsm.toml", "tlevel": ROOT / "examples" / "seed000_tlevel.toml"}
 SPMSM = EXAMPLES["spmsm"]
-TLEVEL = EXAMPLES["tlevel"]
+TTYPE = EXAMPLES["tlevel"]  # the example keeps its file name and C prefix "tlevel"
 #: (example, strategy) of every strategy of both topologies
 CASES = [("spmsm", s) for s in ("conventional", "s1", "s2", "s3")] + [("tlevel", s) for s in ("mpdtc27", "mpdtc63")]
 CASE_IDS = [f"{c}-{s}" for c, s in CASES]

@@ -1,5 +1,5 @@
 """The host port under AddressSanitizer + UndefinedBehaviorSanitizer runs the self-test clean,
-for every two-level and three-level strategy."""
+for every two-level and T-type strategy."""
 from __future__ import annotations
 
 import subprocess

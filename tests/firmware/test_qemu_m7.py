@@ -20,7 +20,7 @@ from codegen.stages import firmware as firmware
 from codegen.stages.fwdata import layouts, selftest_states, trajectory_states
 from codegen.topology import topology_of
 
-from fw_support import CASE_IDS, CASES, TLEVEL, example, needs_arm, needs_qemu
+from fw_support import CASE_IDS, CASES, TTYPE, example, needs_arm, needs_qemu
 
 N_SELFTEST = 10_000
 N_BENCH = 2_000
@@ -185,7 +185,7 @@ def test_ttype_emulated_bench(tmp_path):
     from codegen.cli import main
 
     js = tmp_path / "bench3.json"
-    assert main(["bench", str(TLEVEL), "--emulated", "--json", str(js), "--repeats", "1", "-q"]) == 0
+    assert main(["bench", str(TTYPE), "--emulated", "--json", str(js), "--repeats", "1", "-q"]) == 0
     data = json.loads(js.read_text())
     s27, s63 = data["strategies"]["mpdtc27"], data["strategies"]["mpdtc63"]
     assert s27["m7_instructions_per_step"] > 100 and s27["ratio_to_conventional"] == 1.0
@@ -203,7 +203,7 @@ def test_ttype_firmware_command_builds_and_runs(tmp_path):
     from codegen.cli import main
 
     out = tmp_path / "fw3"
-    assert main(["firmware", str(TLEVEL), "--board", "qemu-m7", "-o", str(out), "-q"]) == 0
+    assert main(["firmware", str(TTYPE), "--board", "qemu-m7", "-o", str(out), "-q"]) == 0
     r = subprocess.run(["make", "-C", str(out)], capture_output=True, text=True)
     assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
     assert "tlevel_step" in (out / "gen" / "tlevel_mpc.c").read_text()

@@ -1,40 +1,33 @@
-"""Three-level commands: generate, verify, simulate, bench, tables (issue 3 must-shows)."""
+"""T-type commands: generate, verify, simulate, bench, tables (issue 3 must-shows)."""
 from __future__ import annotations
 
 import json
-import subprocess
 
 import pytest
 
 from codegen.cli import main
 
-from conftest import EXAMPLES, require_tool
-
-TLEVEL = EXAMPLES / "seed000_tlevel.toml"
-WARN = ["-std=c99", "-O2", "-Wall", "-Wextra", "-Wconversion", "-Wdouble-promotion", "-Werror", "-ffp-contract=off"]
-ARM = ["-mcpu=cortex-m7", "-mthumb", "-mfpu=fpv5-d16", "-mfloat-abi=hard", "-fno-math-errno"]
+from conftest import TTYPE, TTYPE_STRATEGIES, compile_m7, compile_strict
 
 
 def test_generate_compiles_and_is_deterministic(tmp_path):
-    arm = require_tool("arm-none-eabi-gcc", "gcc-arm-none-eabi")
-    for strategy in ("mpdtc27", "mpdtc63"):
+    for strategy in TTYPE_STRATEGIES:
         a, b = tmp_path / f"{strategy}a", tmp_path / f"{strategy}b"
         for out in (a, b):
-            assert main(["generate", str(TLEVEL), "--target", "stm32h743", "--strategy", strategy, "-o", str(out), "-q"]) == 0
+            assert main(["generate", str(TTYPE), "--target", "stm32h743", "--strategy", strategy, "-o", str(out), "-q"]) == 0
         for f in a.iterdir():
             assert f.read_bytes() == (b / f.name).read_bytes(), f.name
-        src = a / "tlevel_mpc.c"
-        for cc in (["gcc"], [arm, *ARM]):
-            r = subprocess.run([*cc, *WARN, "-c", str(src), "-o", str(tmp_path / "x.o")], capture_output=True, text=True)
-            assert r.returncode == 0, r.stderr
+        src = a / "tlevel_mpc.c"  # the example's C prefix
+        compile_strict(src, tmp_path / "x.o")
+        compile_m7(src, tmp_path / "m7.o")
 
 
 @pytest.mark.parametrize("n", [pytest.param(200_000, id="200k"), pytest.param(1_000_000, id="1M", marks=pytest.mark.slow)])
 def test_verify_both_strategies(tmp_path, n):
     js = tmp_path / "verify3.json"
-    assert main(["verify", str(TLEVEL), "--states", str(n), "--json", str(js), "-q"]) == 0
+    assert main(["verify", str(TTYPE), "--states", str(n), "--json", str(js), "-q"]) == 0
     data = json.loads(js.read_text())
-    assert set(data["strategies"]) == {"mpdtc27", "mpdtc63"}
+    assert set(data["strategies"]) == set(TTYPE_STRATEGIES)
     for _s, r in data["strategies"].items():
         assert r["states"] >= n and r["mismatches"] == 0, r["first_mismatch"]
         assert r["sources"]["closed_loop"] > 0
@@ -42,7 +35,7 @@ def test_verify_both_strategies(tmp_path, n):
 
 def test_simulate_table5_metrics(tmp_path, capsys):
     js, plots = tmp_path / "sim3.json", tmp_path / "plots3"
-    assert main(["simulate", str(TLEVEL), "--json", str(js), "--plots", str(plots), "-q"]) == 0
+    assert main(["simulate", str(TTYPE), "--json", str(js), "--plots", str(plots), "-q"]) == 0
     assert "Table 5 layout" in capsys.readouterr().out
     data = json.loads(js.read_text())
     keys = ("T_rip_RMSE", "psi_rip_RMSE", "THD_ia", "Vo_std", "THD_uab", "max_line_jump_udc2", "f_ave_hz", "Cal_ave")
@@ -62,7 +55,7 @@ def test_simulate_table5_metrics(tmp_path, capsys):
 
 def test_bench_both(tmp_path):
     js = tmp_path / "bench3.json"
-    assert main(["bench", str(TLEVEL), "--json", str(js), "--repeats", "2", "-q"]) == 0
+    assert main(["bench", str(TTYPE), "--json", str(js), "--repeats", "2", "-q"]) == 0
     data = json.loads(js.read_text())
     assert data["baseline"] == "mpdtc27"
     for s in ("mpdtc27", "mpdtc63"):
@@ -71,7 +64,7 @@ def test_bench_both(tmp_path):
 
 
 def test_tables_prints_seed_table2_and_required_rows(capsys):
-    assert main(["tables", str(TLEVEL)]) == 0
+    assert main(["tables", str(TTYPE)]) == 0
     out = capsys.readouterr().out
     for seq in ("ONN-OON-OOO-POO-OOO-OON-ONN", "OON-PON-PPN-PPO-PPN-PON-OON"):
         assert f"{seq}  MATCH" in out
@@ -82,8 +75,8 @@ def test_tables_prints_seed_table2_and_required_rows(capsys):
     assert "DIFFERS" in out  # the seed's own inconsistent rows are named
 
 
-def test_bad_three_level_configs(tmp_path, capsys):
-    base = TLEVEL.read_text()
+def test_bad_ttype_configs(tmp_path, capsys):
+    base = TTYPE.read_text()
     cases = [("c_f = 1000e-6", "c_f = 0.0", "inverter.c_f"),
              ('strategy = "mpdtc63"', 'strategy = "s2"', "controller.strategy"),
              ("# t_n_min_s: omitted -> Ts/6 as in the seed", "t_n_min_s = 2e-5", "controller.t_n_min_s")]

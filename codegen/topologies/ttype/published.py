@@ -21,6 +21,13 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
+from codegen.texttable import records, split_rows
+
+
+def _words(cell: str) -> tuple[str, ...]:
+    """A cell of space-separated names as a tuple."""
+    return tuple(cell.split())
+
 # ---------------------------------------------------------------------------
 # Table 1: output vector magnitudes (表1 T型三电平逆变器输出矢量幅值).
 # ---------------------------------------------------------------------------
@@ -46,14 +53,15 @@ class Table2Row(NamedTuple):
         return self.printed.replace("0", "O")
 
 
-TABLE2_SEQUENCES: tuple[Table2Row, ...] = (
-    Table2Row("u_s1^u1", "ONN-00N-000-POO-000-00N-ONN"),
-    Table2Row("u_s1^u2", "00N-000-POO-PPO-POO-000-00N"),
-    Table2Row("u_m1^u1", "ONN-00N-PON-POO-PON-00N-ONN"),
-    Table2Row("u_m1^u2", "00N-PON-POO-PPO-POO-PON-00N"),
-    Table2Row("u_L1", "ONN-PNN-PON-POO-PON-PNN-ONN"),
-    Table2Row("u_L2", "00N-PON-PPN-PPO-PPN-PON-00N"),
-)
+TABLE2_SEQUENCES: tuple[Table2Row, ...] = records(Table2Row, split_rows("""
+# name    | printed sequence
+    u_s1^u1 | ONN-00N-000-POO-000-00N-ONN
+    u_s1^u2 | 00N-000-POO-PPO-POO-000-00N
+    u_m1^u1 | ONN-00N-PON-POO-PON-00N-ONN
+    u_m1^u2 | 00N-PON-POO-PPO-POO-PON-00N
+    u_L1    | ONN-PNN-PON-POO-PON-PNN-ONN
+    u_L2    | 00N-PON-PPN-PPO-PPN-PON-00N
+""", 2))
 
 
 # ---------------------------------------------------------------------------
@@ -66,57 +74,33 @@ class Table3Row(NamedTuple):
     candidates: tuple[str, ...]  # ASCII transcription, printed order
 
 
-TABLE3_SECTOR_I: tuple[Table3Row, ...] = (
-    Table3Row(0, "u_0", "u_0, u_{s1}, u_1, u_{m1}, u_{L1}",
-              ("u0", "u_s1", "u1", "u_m1", "u_L1")),
-    Table3Row(1, "u_1, u_{s1}^{u_1}, u_{m1}^{u_1}, u_{L1}^{u_1}, u_{s6}^{u_1}, u_{m6}^{u_1}, u_{L12}",
-              "u_0, u_1, u_{s1}, u_{m1}, u_{L1}, u_7, u_8",
-              ("u0", "u1", "u_s1", "u_m1", "u_L1", "u7", "u8")),
-    # header garbled: u_s2^u2 / u_s6^u2 / u_L2^u2 (virtual vectors starting at u2
-    # are u_s1^u2, u_s2^u2, u_m1^u2, u_m2^u2, u_L2, u_L3)
-    Table3Row(2, "u_2, u_{s2}^{u_2}, u_{m1}^{u_2}, u_{L2}^{u_2}, u_{s6}^{u_2}, u_{m2}^{u_2}, u_{L3}",
-              "u_0, u_{s1}, u_{m1}, u_{L1}, u_8",
-              ("u0", "u_s1", "u_m1", "u_L1", "u8")),
-    Table3Row(3, "u_3, u_{s3}^{u_3}, u_{m2}^{u_3}, u_{L4}^{u_3}, u_{s6}^{u_3}, u_{m3}^{u_3}, u_{L5}",
-              "u_0, u_{s2}^{u_2}, u_{m2}^{u_2}",
-              ("u0", "u_s2^u2", "u_m2^u2")),
-    # candidate cell identical to row u3's as printed
-    Table3Row(4, "u_4, u_{s4}^{u_4}, u_{m3}^{u_4}, u_{L6}^{u_4}, u_{s6}^{u_4}, u_{m4}^{u_4}, u_{L7}",
-              "u_0, u_{s2}^{u_2}, u_{m2}^{u_2}",
-              ("u0", "u_s2^u2", "u_m2^u2")),
-    # header lists u_L8 twice
-    Table3Row(5, "u_5, u_{s5}^{u_5}, u_{m4}^{u_5}, u_{L8}^{u_5}, u_{s6}^{u_5}, u_{m5}^{u_5}, u_{L8}",
-              "u_0, u_{s6}^{u_6}, u_{m6}^{u_6}",
-              ("u0", "u_s6^u6", "u_m6^u6")),
-    Table3Row(6, "u_6, u_{s6}^{u_6}, u_{m5}^{u_6}, u_{L10}^{u_6}, u_{s6}^{u_6}, u_{m6}^{u_6}, u_{L11}",
-              "u_0, u_1, u_{s1}^{u_1}, u_{m1}^{u_1}, u_{L1}",
-              ("u0", "u1", "u_s1^u1", "u_m1^u1", "u_L1")),
-    Table3Row(7, "u_7", "u_1, u_{s1}^{u_1}, u_{m1}^{u_1}, u_{L1}, u_7, u_8",
-              ("u1", "u_s1^u1", "u_m1^u1", "u_L1", "u7", "u8")),
-    Table3Row(8, "u_8", "u_1, u_{s1}, u_{m1}, u_{L1}, u_7, u_8",
-              ("u1", "u_s1", "u_m1", "u_L1", "u7", "u8")),
-    Table3Row(9, "u_9", "u_{s1}^{u_2}, u_{m1}^{u_2}, u_8",
-              ("u_s1^u2", "u_m1^u2", "u8")),
-    Table3Row(10, "u_{10}", "u_2, u_{s1}^{u_2}, u_{m1}^{u_2}, u_{L2}, u_9",
-              ("u2", "u_s1^u2", "u_m1^u2", "u_L2", "u9")),
-    Table3Row(11, "u_{11}", "u_{s2}^{u_3}, u_{m2}^{u_3}, u_{10}",
-              ("u_s2^u3", "u_m2^u3", "u10")),
-    Table3Row(12, "u_{12}", "u_3, u_{s2}^{u_3}, u_{m2}^{u_3}, u_{L4}, u_{11}",
-              ("u3", "u_s2^u3", "u_m2^u3", "u_L4", "u11")),
-    # 'u_{L2}' breaks the pattern of the neighbouring rows (u12 expected)
-    Table3Row(13, "u_{13}", "u_{s3}^{u_4}, u_{m3}^{u_4}, u_{L2}",
-              ("u_s3^u4", "u_m3^u4", "u_L2")),
-    Table3Row(14, "u_{14}", "u_5, u_{s5}, u_{m5}, u_{L9}, u_{15}",
-              ("u5", "u_s5", "u_m5", "u_L9", "u15")),
-    Table3Row(15, "u_{15}", "u_{s5}^{u_5}, u_{m5}^{u_5}, u_{16}",
-              ("u_s5^u5", "u_m5^u5", "u16")),
-    Table3Row(16, "u_{16}", "u_6, u_{s6}^{u_6}, u_{m6}^{u_6}, u_{L11}, u_{17}",
-              ("u6", "u_s6^u6", "u_m6^u6", "u_L11", "u17")),
-    Table3Row(17, "u_{17}", "u_{s6}^{u_6}, u_{m6}^{u_6}, u_{18}",
-              ("u_s6^u6", "u_m6^u6", "u18")),
-    Table3Row(18, "u_{18}", "u_1, u_{s1}^{u_1}, u_{m1}^{u_1}, u_{L1}, u_7",
-              ("u1", "u_s1^u1", "u_m1^u1", "u_L1", "u7")),
-)
+TABLE3_SECTOR_I: tuple[Table3Row, ...] = records(Table3Row, split_rows("""
+# prev | previous-vector cell as extracted | candidate cell as extracted | ASCII transcription
+0 | u_0 | u_0, u_{s1}, u_1, u_{m1}, u_{L1} | u0 u_s1 u1 u_m1 u_L1
+1 | u_1, u_{s1}^{u_1}, u_{m1}^{u_1}, u_{L1}^{u_1}, u_{s6}^{u_1}, u_{m6}^{u_1}, u_{L12} | u_0, u_1, u_{s1}, u_{m1}, u_{L1}, u_7, u_8 | u0 u1 u_s1 u_m1 u_L1 u7 u8
+# header garbled: u_s2^u2 / u_s6^u2 / u_L2^u2 (virtual vectors starting at u2
+# are u_s1^u2, u_s2^u2, u_m1^u2, u_m2^u2, u_L2, u_L3)
+2 | u_2, u_{s2}^{u_2}, u_{m1}^{u_2}, u_{L2}^{u_2}, u_{s6}^{u_2}, u_{m2}^{u_2}, u_{L3} | u_0, u_{s1}, u_{m1}, u_{L1}, u_8 | u0 u_s1 u_m1 u_L1 u8
+3 | u_3, u_{s3}^{u_3}, u_{m2}^{u_3}, u_{L4}^{u_3}, u_{s6}^{u_3}, u_{m3}^{u_3}, u_{L5} | u_0, u_{s2}^{u_2}, u_{m2}^{u_2} | u0 u_s2^u2 u_m2^u2
+# candidate cell identical to row u3's as printed
+4 | u_4, u_{s4}^{u_4}, u_{m3}^{u_4}, u_{L6}^{u_4}, u_{s6}^{u_4}, u_{m4}^{u_4}, u_{L7} | u_0, u_{s2}^{u_2}, u_{m2}^{u_2} | u0 u_s2^u2 u_m2^u2
+# header lists u_L8 twice
+5 | u_5, u_{s5}^{u_5}, u_{m4}^{u_5}, u_{L8}^{u_5}, u_{s6}^{u_5}, u_{m5}^{u_5}, u_{L8} | u_0, u_{s6}^{u_6}, u_{m6}^{u_6} | u0 u_s6^u6 u_m6^u6
+6 | u_6, u_{s6}^{u_6}, u_{m5}^{u_6}, u_{L10}^{u_6}, u_{s6}^{u_6}, u_{m6}^{u_6}, u_{L11} | u_0, u_1, u_{s1}^{u_1}, u_{m1}^{u_1}, u_{L1} | u0 u1 u_s1^u1 u_m1^u1 u_L1
+7 | u_7 | u_1, u_{s1}^{u_1}, u_{m1}^{u_1}, u_{L1}, u_7, u_8 | u1 u_s1^u1 u_m1^u1 u_L1 u7 u8
+8 | u_8 | u_1, u_{s1}, u_{m1}, u_{L1}, u_7, u_8 | u1 u_s1 u_m1 u_L1 u7 u8
+9 | u_9 | u_{s1}^{u_2}, u_{m1}^{u_2}, u_8 | u_s1^u2 u_m1^u2 u8
+10 | u_{10} | u_2, u_{s1}^{u_2}, u_{m1}^{u_2}, u_{L2}, u_9 | u2 u_s1^u2 u_m1^u2 u_L2 u9
+11 | u_{11} | u_{s2}^{u_3}, u_{m2}^{u_3}, u_{10} | u_s2^u3 u_m2^u3 u10
+12 | u_{12} | u_3, u_{s2}^{u_3}, u_{m2}^{u_3}, u_{L4}, u_{11} | u3 u_s2^u3 u_m2^u3 u_L4 u11
+# 'u_{L2}' breaks the pattern of the neighbouring rows (u12 expected)
+13 | u_{13} | u_{s3}^{u_4}, u_{m3}^{u_4}, u_{L2} | u_s3^u4 u_m3^u4 u_L2
+14 | u_{14} | u_5, u_{s5}, u_{m5}, u_{L9}, u_{15} | u5 u_s5 u_m5 u_L9 u15
+15 | u_{15} | u_{s5}^{u_5}, u_{m5}^{u_5}, u_{16} | u_s5^u5 u_m5^u5 u16
+16 | u_{16} | u_6, u_{s6}^{u_6}, u_{m6}^{u_6}, u_{L11}, u_{17} | u6 u_s6^u6 u_m6^u6 u_L11 u17
+17 | u_{17} | u_{s6}^{u_6}, u_{m6}^{u_6}, u_{18} | u_s6^u6 u_m6^u6 u18
+18 | u_{18} | u_1, u_{s1}^{u_1}, u_{m1}^{u_1}, u_{L1}, u_7 | u1 u_s1^u1 u_m1^u1 u_L1 u7
+""", 4), (int, str, str, _words))
 
 
 # ---------------------------------------------------------------------------

@@ -8,7 +8,8 @@
     redundant members and groups tie), angle-reduction borders, every guard
     limit exactly / one ulp beyond / NaN / inf, every prev_vector 0..62 with
     t_n_prev_s at 0, T_N_min and Ts/3, invalid prev_vector and t_n_prev_s.
-Deterministic for a given seed; vectorised.
+Deterministic for a given seed; vectorised.  The topology-independent pieces
+are :mod:`codegen.teststates`.
 """
 from __future__ import annotations
 
@@ -16,11 +17,11 @@ import math
 
 import numpy as np
 
+from codegen import teststates as common
 from codegen.model import Model
+from codegen.numfmt.float32 import F
 from codegen.topologies.ttype.derive import ThreeLevelTables, guard_limits, t_n_min
 from codegen.topologies.ttype.records import INPUT_DTYPE
-
-F = np.float32
 
 
 def random_states(model: Model, n: int, seed: int = 1) -> np.ndarray:
@@ -29,13 +30,7 @@ def random_states(model: Model, n: int, seed: int = 1) -> np.ndarray:
     g = guard_limits(model)
     ts = model.controller.dt_s
     x = np.zeros(n, INPUT_DTYPE)
-    i_max = 1.03 * g["I_TRIP_A"] / 2
-    x["ia_a"] = rng.uniform(-i_max, i_max, n)
-    x["ib_a"] = rng.uniform(-i_max, i_max, n)
-    wide = rng.random(n) < 0.05
-    x["theta_e_rad"] = np.where(wide, rng.uniform(-260, 260, n), rng.uniform(0, 2 * math.pi, n))
-    w = 1.01 * g["OMEGA_GUARD_RAD_S"]
-    x["omega_e_rad_s"] = np.where(rng.random(n) < 0.9, rng.uniform(-w / 5, w / 5, n), rng.uniform(-w, w, n))
+    common.random_currents_and_motion(x, g, rng)
     udc = model.inverter.udc_v
     lo, hi = g["UC_MIN_V"], g["UC_MAX_V"]
     # V_o from 0 up to its limits (one capacitor at its guard limit), total Udc near nominal
@@ -43,15 +38,27 @@ def random_states(model: Model, n: int, seed: int = 1) -> np.ndarray:
     vo = np.where(rng.random(n) < 0.7, rng.normal(0, 2.0, n), rng.uniform(-1, 1, n) * (half - lo))
     x["uc1_v"] = np.clip(half + vo, lo - 0.01 * (hi - lo), hi + 0.01 * (hi - lo))
     x["uc2_v"] = np.clip(half - vo, lo - 0.01 * (hi - lo), hi + 0.01 * (hi - lo))
-    t = 1.01 * g["TORQUE_REF_GUARD_NM"]
-    x["torque_ref_nm"] = np.where(rng.random(n) < 0.9, rng.uniform(-t / 4, t / 4, n), rng.uniform(-t, t, n))
+    x["torque_ref_nm"] = common.random_torque_ref(n, g, rng)
     x["prev_vector"] = np.where(rng.random(n) < 0.002, rng.integers(63, 65536, n), rng.integers(0, 63, n))
     x["t_n_prev_s"] = np.where(rng.random(n) < 0.002, rng.uniform(-ts, ts, n),
                                rng.uniform(t_n_min(model), ts / 3, n))
     return x
 
 
+def limits(model: Model) -> tuple[common.Limit, ...]:
+    """Every guard limit of the T-type input record (t_n_prev_s: for a virtual previous vector)."""
+    g = guard_limits(model)
+    lo, hi = g["UC_MIN_V"], g["UC_MAX_V"]
+    return (common.Limit("ia_a", g["I_TRIP_A"]), common.Limit("ib_a", g["I_TRIP_A"]),
+            common.Limit("uc1_v", lo, "lower"), common.Limit("uc1_v", hi, "upper"),
+            common.Limit("uc2_v", lo, "lower"), common.Limit("uc2_v", hi, "upper"),
+            common.Limit("theta_e_rad", g["ANGLE_GUARD_RAD"]), common.Limit("omega_e_rad_s", g["OMEGA_GUARD_RAD_S"]),
+            common.Limit("torque_ref_nm", g["TORQUE_REF_GUARD_NM"]),
+            common.Limit("t_n_prev_s", model.controller.dt_s / 3, "upper"), common.Limit("t_n_prev_s", 0.0, "lower"))
+
+
 def _nominal(model: Model, n: int, rng: np.random.Generator) -> np.ndarray:
+    """Random states with balanced nominal capacitor voltages, theta in one turn, a valid previous vector."""
     x = random_states(model, n, seed=int(rng.integers(1 << 30)))
     x["theta_e_rad"] = rng.uniform(0, 2 * math.pi, n)
     udc = model.inverter.udc_v
@@ -82,9 +89,7 @@ def _on_sector_border(model: Model, x: np.ndarray, rng: np.random.Generator) -> 
     psi_dq = psi1 * np.exp(-1j * th)
     i_d = (psi_dq.real - m.psi_f_wb) / m.ld_h
     i_q = psi_dq.imag / m.ld_h
-    i_ab = (i_d + 1j * i_q) * np.exp(1j * th)
-    x["ia_a"] = i_ab.real
-    x["ib_a"] = (-i_ab.real + math.sqrt(3) * i_ab.imag) / 2
+    x["ia_a"], x["ib_a"] = common.phase_currents(i_d, i_q, th)
     x["omega_e_rad_s"] = np.where(rng.random(n) < 0.5, 0.0, x["omega_e_rad_s"])
 
 
@@ -102,13 +107,8 @@ def adversarial_states(model: Model, t: ThreeLevelTables, n_target: int = 200_00
     parts.append(x)
 
     # angle-reduction borders: multiples of pi/4, +-0, one ulp either side
-    k = rng.integers(-320, 321, n_target // 10)
-    th = (k * (math.pi / 4)).astype(np.float32)
-    th = np.where(rng.random(len(k)) < 0.5, np.nextafter(th, F(np.inf)), th)
-    th = np.where(rng.random(len(k)) < 0.3, np.nextafter(th, F(-np.inf)), th)
-    x = _nominal(model, len(k), rng)
-    x["theta_e_rad"] = np.clip(th, -g["ANGLE_GUARD_RAD"], g["ANGLE_GUARD_RAD"])
-    x["theta_e_rad"][:4] = [0.0, -0.0, g["ANGLE_GUARD_RAD"], -g["ANGLE_GUARD_RAD"]]
+    x = _nominal(model, n_target // 10, rng)
+    x["theta_e_rad"] = common.angle_reduction_borders(len(x), g["ANGLE_GUARD_RAD"], rng)
     parts.append(x)
 
     # ties: zero currents (all i_o = 0: redundant members tie), zero speed,
@@ -133,39 +133,12 @@ def adversarial_states(model: Model, t: ThreeLevelTables, n_target: int = 200_00
     x["uc2_v"] = np.where(up, udc / 2, lim)
     parts.append(x)
 
-    # guard limits: exactly at the limit (passes), one ulp beyond (trips), NaN, inf
-    n = n_target // 5
-    x = _nominal(model, n, rng)
-    field_limits = [
-        ("ia_a", g["I_TRIP_A"]), ("ib_a", g["I_TRIP_A"]),
-        ("uc1_v", g["UC_MIN_V"]), ("uc1_v", g["UC_MAX_V"]), ("uc2_v", g["UC_MIN_V"]), ("uc2_v", g["UC_MAX_V"]),
-        ("theta_e_rad", g["ANGLE_GUARD_RAD"]), ("omega_e_rad_s", g["OMEGA_GUARD_RAD_S"]),
-        ("torque_ref_nm", g["TORQUE_REF_GUARD_NM"]), ("t_n_prev_s", ts / 3), ("t_n_prev_s", 0.0),
-    ]
-    specials = np.array([np.nan, np.inf, -np.inf], np.float32)
-    which = rng.integers(0, len(field_limits), n)
-    kind = rng.integers(0, 5, n)
-    for i, (name, lim) in enumerate(field_limits):
-        sel = which == i
-        lim32 = F(lim)
-        signed = name not in ("uc1_v", "uc2_v", "t_n_prev_s")
-        sgn = np.where(rng.random(sel.sum()) < 0.5, F(1), F(-1)) if signed else F(1)
-        at = (sgn * lim32).astype(np.float32)
-        if name == "t_n_prev_s" and lim == 0.0:
-            beyond = np.full(sel.sum(), np.nextafter(F(0), F(-1)), np.float32)
-            inside = np.full(sel.sum(), np.nextafter(F(0), F(1)), np.float32)
-        else:
-            beyond = np.nextafter(at, (at * F(2)).astype(np.float32))
-            inside = np.nextafter(at, F(0))
-        special = specials[rng.integers(0, 3, sel.sum())]
-        k_sel = kind[sel]
-        vals = np.select([k_sel == 0, k_sel == 1, k_sel == 2], [at, beyond, inside], special)
-        x[name][sel] = vals
-        if name in ("ia_a", "ib_a"):  # keep the other phase small so only this limit matters
-            other = "ib_a" if name == "ia_a" else "ia_a"
-            x[other][sel] = 0.0
-        if name == "t_n_prev_s":  # only checked for a virtual previous vector
-            x["prev_vector"][sel] = rng.integers(27, 63, sel.sum())
+    # guard limits: exactly at the limit (passes), one ulp beyond (trips), one inside, NaN, inf
+    x = _nominal(model, n_target // 5, rng)
+    lims = limits(model)
+    which = common.apply_limit_cases(x, lims, rng)
+    tn = np.isin(which, [i for i, lim in enumerate(lims) if lim.field == "t_n_prev_s"])
+    x["prev_vector"][tn] = rng.integers(27, 63, int(tn.sum()))  # only checked for a virtual previous vector
     parts.append(x)
 
     # every prev_vector 0..62 (and invalid ids), t_n_prev_s at 0, T_N_min, Ts/3,

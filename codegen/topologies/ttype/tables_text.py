@@ -1,4 +1,4 @@
-"""Text report of the three-level derivations against the seed's Tables 2-3
+"""``mpcgen tables`` for the T-type topology: the derivations against the seed's Tables 2-3
 (mpdtc-three-level.md "Virtual vectors", "Candidate table (Table 3), derived").
 
 Structured checks (for tests and the ``tables`` command) and ``tables_report()``.

@@ -1,11 +1,10 @@
-"""``mpcgen tables``: print the vector set and the switch tables.
+"""``mpcgen tables`` for the two-level topology: the vector set and the switch tables.
 
-Two-level: ``--utilisation published`` derives the s2/s3 tables from the
+``--utilisation published`` derives the s2/s3 tables from the
 seed's published utilisation Tables 3-8 and compares them with the seed's
 published tables; ``--utilisation training`` derives them from a closed-loop
 training run of the conventional controller and prints the utilisation
-tables in the seed's layout.  Three-level: the derived sequences and the
-candidate table (codegen.topologies.ttype.report).
+tables in the seed's layout.
 """
 from __future__ import annotations
 
@@ -82,12 +81,3 @@ def two_level_tables_text(model: Model, source: str, log: Callable[[str], None])
     parts += ["s3 row dT>0,dpsi>0 vs the seed's published row:",
               format_comparison(compare_tables((s3[0],), (pub.PUBLISHED_S3_ROW,)), "s3")]
     return "\n".join(parts)
-
-
-def tables_text(model: Model, source: str, log: Callable[[str], None] = print) -> str:
-    """Dispatch on topology."""
-    if model.inverter.topology == "two-level":
-        return two_level_tables_text(model, source, log)
-    from codegen.topologies.ttype.tables_text import tables_report
-
-    return tables_report()
