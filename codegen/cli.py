@@ -212,8 +212,8 @@ def build_parser() -> argparse.ArgumentParser:
     t = sub.add_parser("tables", help="print derived switch tables and vector sets")
     _add_config_args(t)
     t.add_argument("--utilisation", choices=("published", "training"), default=None,
-                   help="two-level: derive from the seed's published utilisation tables or from a training "
-                        "run (default)")
+                   help="topologies with trained switch tables: derive them from the published utilisation "
+                        "tables or from a training run (default)")
     t.add_argument("--derive", action="store_true",
                    help="run the training and write the s2/s3 tables with their provenance to -o FILE "
                         "(name that file in the config as controller.tables_file)")
