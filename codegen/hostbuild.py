@@ -176,6 +176,7 @@ def _check_layout(lib: HostLib) -> None:
     ffi, p, r = lib.ffi, lib.prefix, lib.records
     for ctype, layout in ((f"{p}_input_t", r.input), (f"{p}_output_t", r.output)):
         dtype = layout.dtype
+        assert dtype.fields is not None
         if ffi.sizeof(ctype) != dtype.itemsize:
             raise BuildError(f"{ctype}: C size {ffi.sizeof(ctype)} != numpy {dtype.itemsize}")
         for f in layout.fields:

@@ -134,7 +134,7 @@ def apply_limit_cases(x: np.ndarray, limits: Sequence[Limit], rng: np.random.Gen
         sel = which == i
         m = int(sel.sum())
         sign = np.where(rng.random(m) < 0.5, F(1), F(-1)) if lim.side == "both" else F(1)
-        at = (sign * F(lim.value)).astype(np.float32)
+        at = np.asarray(sign * F(lim.value), dtype=np.float32)
         beyond = np.nextafter(at, lim.outward(at))
         inside = np.nextafter(at, -lim.outward(at))
         special = NON_FINITE[rng.integers(0, 3, m)]
@@ -161,6 +161,7 @@ def guard_rows(base: Mapping[str, object], floats: Sequence[str], limits: Sequen
     rows += [{**base, name: v} for name in floats for v in NON_FINITE]
     for lim in limits:
         v = F(lim.value)
+        values: tuple[np.float32, ...]
         if lim.side == "both":
             values = (v, up(v), down(v), -v, down(-v), up(-v))
         elif lim.side == "upper":

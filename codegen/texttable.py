@@ -12,7 +12,7 @@ turn it into tuples.  Conventions of a block:
 """
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from typing import Any, TypeVar
 
 __all__ = ["lines", "numbers", "number_rows", "int_cells", "split_rows", "records"]
@@ -66,7 +66,7 @@ def split_rows(text: str, columns: int) -> tuple[tuple[str, ...], ...]:
     return tuple(rows)
 
 
-def records(make: Callable[..., T], rows: Sequence[Sequence[Any]],
+def records(make: Callable[..., T], rows: Iterable[Sequence[Any]],
             convert: Sequence[Callable[[Any], Any]] | None = None) -> tuple[T, ...]:
     """``make(*row)`` for every row, each cell first passed through its ``convert`` function."""
     if convert is None:

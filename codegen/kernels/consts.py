@@ -34,6 +34,10 @@ class Constants:
     def __getitem__(self, name: str) -> Any:
         return getattr(self, name)
 
+    def __getattr__(self, name: str) -> Any:
+        """Typing aid (constants are set per step); an unknown name is an AttributeError naming it."""
+        raise AttributeError(f"no constant {name!r} in this step")
+
 
 def guard_limits(model: Model, dc_min: str, dc_max: str, dc_scale: float) -> dict[str, float]:
     """Input-guard limits (numerics.md "Inputs are guarded"), float64, in guard order.

@@ -49,17 +49,35 @@ class Ops(Protocol):
 class NumberFormat(Protocol):
     """What a stage or a topology may ask of a number format."""
 
-    #: config value of ``controller.number_format``
-    name: str
-    #: numpy scalar type of a real value, and of its bit pattern
-    real_dtype: np.dtype
-    bits_dtype: np.dtype
-    #: C type of a real value
-    c_type: str
-    #: jinja2 macro library of the format (relative to templates/)
-    macros: str
-    #: the reference's operation helpers in this format
-    ops: Ops
+    @property
+    def name(self) -> str:
+        """Config value of ``controller.number_format``."""
+        ...
+
+    @property
+    def real_dtype(self) -> np.dtype:
+        """numpy scalar type of a real value."""
+        ...
+
+    @property
+    def bits_dtype(self) -> np.dtype:
+        """numpy type of a real value's bit pattern (compared for bit-exactness)."""
+        ...
+
+    @property
+    def c_type(self) -> str:
+        """C type of a real value."""
+        ...
+
+    @property
+    def macros(self) -> str:
+        """jinja2 macro library of the format (relative to templates/)."""
+        ...
+
+    @property
+    def ops(self) -> Ops:
+        """The reference's operation helpers in this format."""
+        ...
 
     def const(self, x: float) -> np.generic:
         """Round a float64 constant once to the format."""

@@ -15,7 +15,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -116,6 +116,13 @@ class TraceBase:
     t_s: np.ndarray
     omega_m_rad_s: np.ndarray
     speed_ref_rad_s: np.ndarray
+
+    if TYPE_CHECKING:  # the generated dataclass takes every field as a keyword
+        def __init__(self, **fields: Any) -> None: ...
+
+    def __getattr__(self, name: str) -> np.ndarray:
+        """Typing aid: the generated dataclass holds one array per trace field (see :func:`trace_class`)."""
+        raise AttributeError(f"{type(self).__name__} has no field {name!r}")
 
     @property
     def n(self) -> int:

@@ -39,12 +39,12 @@ class ThreeLevelTables(HasConsts):
     strategy: str  # 'mpdtc27' | 'mpdtc63'
     consts: tuple[Const, ...]
     # per state (27): neutral-point coefficients i_o = ka i_a + kb i_b + kc i_c
-    io_a: tuple[np.float32, ...]
-    io_b: tuple[np.float32, ...]
-    io_c: tuple[np.float32, ...]
+    io_a: tuple[np.generic, ...]
+    io_b: tuple[np.generic, ...]
+    io_c: tuple[np.generic, ...]
     # per vector id (63): period-average voltage / Udc, virtual flag, 7 states
-    ux: tuple[np.float32, ...]
-    uy: tuple[np.float32, ...]
+    ux: tuple[np.generic, ...]
+    uy: tuple[np.generic, ...]
     is_virtual: tuple[int, ...]
     seq: tuple[tuple[int, ...], ...]
     end_state: tuple[int, ...]

@@ -25,7 +25,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -99,16 +99,20 @@ class _TraceProperties(TraceBase):
         return 0.5 * self.udc_v - self.vo_v
 
 
-Trace = trace_class("Trace", __name__, TRACE, """One T-type closed-loop run (read-only arrays).
+if TYPE_CHECKING:  # a class for annotations; the fields come from TRACE
+    class Trace(_TraceProperties):
+        """One T-type closed-loop run."""
+else:
+    Trace = trace_class("Trace", __name__, TRACE, """One T-type closed-loop run (read-only arrays).
 
-    Per-period arrays (n,) are taken at the sample instant t_k = k*dt_s;
-    plant quantities float64, controller outputs in their C types.
-    ``vector``/``t_n_s`` are the decision of period k (applied during
-    [t_k+1, t_k+2)); ``applied_vector``, ``uab_v``, ``seg_s``, ``seg_states``
-    and ``leg_changes`` describe the period actually applied during
-    [t_k, t_k+1).  Per-segment arrays have shape (n, 7); zero-length
-    segments (``seg_s == 0``) were not applied.
-    """, scalars=("udc_v",), base=_TraceProperties)
+        Per-period arrays (n,) are taken at the sample instant t_k = k*dt_s;
+        plant quantities float64, controller outputs in their C types.
+        ``vector``/``t_n_s`` are the decision of period k (applied during
+        [t_k+1, t_k+2)); ``applied_vector``, ``uab_v``, ``seg_s``, ``seg_states``
+        and ``leg_changes`` describe the period actually applied during
+        [t_k, t_k+1).  Per-segment arrays have shape (n, 7); zero-length
+        segments (``seg_s == 0``) were not applied.
+        """, scalars=("udc_v",), base=_TraceProperties)
 
 
 def params_from_model(ffi: Any, model: Model, substep_max_s: float | None = None) -> Any:

@@ -181,16 +181,16 @@ def tables_report() -> str:
     ok, text = fallback_example_check()
     lines += ["", f"Seed fallback example: {text}  {'MATCH' if ok else 'DIFFERS'}", "",
               "Table 3: u* in sector I, derived rows vs the seed (extracted text)"]
-    for c in table3_check():
-        lines.append(f"  {c.prev_label:<11} derived {_fmt_row(c.derived)} [{c.n_groups}]  {c.status}")
-        if c.status == "DIFFERS":
-            lines.append(f"  {'':<11} seed    {c.seed_printed}")
-        if c.note:
-            lines.append(f"  {'':<11} ({c.note})")
+    for r in table3_check():
+        lines.append(f"  {r.prev_label:<11} derived {_fmt_row(r.derived)} [{r.n_groups}]  {r.status}")
+        if r.status == "DIFFERS":
+            lines.append(f"  {'':<11} seed    {r.seed_printed}")
+        if r.note:
+            lines.append(f"  {'':<11} ({r.note})")
     for name in ("NNN", "PPP"):
-        r = t.row(v.state_by_name(name), 0)
-        extra = " short: no sector offers 3 groups; never applied by 63-MPDTC" if r.short else ""
-        lines.append(f"  u0 ({name})    derived {_fmt_row(cd.row_labels(r))} [{r.n_groups}]  "
+        row = t.row(v.state_by_name(name), 0)
+        extra = " short: no sector offers 3 groups; never applied by 63-MPDTC" if row.short else ""
+        lines.append(f"  u0 ({name})    derived {_fmt_row(cd.row_labels(row))} [{row.n_groups}]  "
                      f"not in seed{extra}")
     hist = group_count_histogram()
     lines += ["", "Group counts over the 25 states 63-MPDTC applies x 12 sectors: "

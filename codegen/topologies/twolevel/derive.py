@@ -31,8 +31,8 @@ class TwoLevelTables(HasConsts):
     predictor: str
     delay_compensation: bool
     consts: tuple[Const, ...]
-    ux: tuple[np.float32, ...]  # unit vector alpha components, V0..V6
-    uy: tuple[np.float32, ...]
+    ux: tuple[np.generic, ...]  # unit vector alpha components, V0..V6
+    uy: tuple[np.generic, ...]
     vec_to_sw: tuple[int, ...]
     sw_to_vec: tuple[int, ...]
     zero_sw: tuple[int, ...]

@@ -78,7 +78,7 @@ def zero_vector_utilisation(trace, bands: list[float]) -> list[dict]:
     """Seed Table 1: zero-vector use among samples with |dT| <= band (dT from the controller's estimate)."""
     d_t = np.abs(trace.torque_ref_nm - trace.te_est_nm.astype(np.float64))
     zero = trace.vector == 0
-    rows = []
+    rows: list[dict[str, object]] = []
     for b in bands:
         sel = d_t <= b
         n, nz = int(sel.sum()), int((sel & zero).sum())

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -30,6 +30,7 @@ from codegen.records import I32, U16, Field, Record
 from codegen.simulator import api
 from codegen.simulator.driver import (
     DEFAULT_CHUNK,
+    TraceBase,
     default_substeps,
     fill_common_params,
     motor_inputs,
@@ -59,15 +60,19 @@ SIM = api.SimApi("twolevel", PARAMS, STATE, TRACE, Path(__file__).resolve().pare
     -3: "the controller returned a switching state outside 0..7",
 })
 
-Trace = trace_class("Trace", __name__, TRACE, """One closed-loop two-level run, one entry per control period (read-only arrays).
+if TYPE_CHECKING:  # a class for annotations; the fields come from TRACE
+    class Trace(TraceBase):
+        """One closed-loop run."""
+else:
+    Trace = trace_class("Trace", __name__, TRACE, """One closed-loop two-level run, one entry per control period (read-only arrays).
 
-    Values are taken at the sample instant t_k = k*dt_s, before the period's
-    switching state is applied.  Plant quantities are float64; controller
-    outputs keep their C types (float32 estimates, uint16 decisions).
-    ``sw`` is the controller's decision at k; ``applied_sw`` the state the
-    inverter holds during [t_k, t_k+1) (equal to ``sw`` without delay
-    compensation, the previous decision with it).
-    """)
+        Values are taken at the sample instant t_k = k*dt_s, before the period's
+        switching state is applied.  Plant quantities are float64; controller
+        outputs keep their C types (float32 estimates, uint16 decisions).
+        ``sw`` is the controller's decision at k; ``applied_sw`` the state the
+        inverter holds during [t_k, t_k+1) (equal to ``sw`` without delay
+        compensation, the previous decision with it).
+        """)
 
 
 def params_from_model(ffi: Any, model: Model, substeps: int | None = None) -> Any:
