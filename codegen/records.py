@@ -26,7 +26,7 @@ import numpy as np
 
 from .numfmt import NumberFormat
 
-__all__ = ["REAL", "U16", "F64", "F32", "I32", "I64", "Field", "Record", "RecordLayout", "CMember", "Value"]
+__all__ = ["REAL", "U16", "F64", "F32", "I32", "I64", "KINDS", "fields", "Field", "Record", "RecordLayout", "CMember", "Value"]
 
 #: a real value, stored as the number format says (float32, fixed point)
 REAL = "real"
@@ -46,6 +46,8 @@ _FIXED: dict[str, tuple[np.dtype, str, str]] = {
     I32: (np.dtype(np.int32), "int32_t", "0"),
     I64: (np.dtype(np.int64), "int64_t", "0"),
 }
+#: every kind
+KINDS: tuple[str, ...] = (REAL, *_FIXED)
 
 
 @dataclass(frozen=True)
@@ -56,6 +58,24 @@ class Field:
     kind: str  # REAL | U16 | F64 | F32 | I32 | I64
     length: int
     doc: str
+
+
+def fields(table: str, **lengths: int) -> tuple[Field, ...]:
+    """Fields from a text table, one per line: ``name  kind  length  meaning...``.
+
+    ``kind`` is a kind's value (``real``, ``u16``, ``f64``, ...); ``length`` a
+    number or the name of a keyword argument (``fields(TABLE, N_SEG=7)``).
+    Blank lines are skipped.
+    """
+    out = []
+    for line in table.strip().splitlines():
+        if not line.strip():
+            continue
+        name, kind, length, doc = line.split(None, 3)
+        if kind not in KINDS:
+            raise ValueError(f"field {name}: unknown kind {kind!r}; kinds: {', '.join(KINDS)}")
+        out.append(Field(name, kind, lengths[length] if length in lengths else int(length), doc.strip()))
+    return tuple(out)
 
 
 @dataclass(frozen=True)
@@ -191,9 +211,9 @@ class RecordLayout:
 
 
 #: Motor measurements every controller step takes first (every topology).
-MOTOR_INPUT_FIELDS: tuple[Field, ...] = (
-    Field("ia_a", REAL, 1, "sampled phase-a current, A"),
-    Field("ib_a", REAL, 1, "sampled phase-b current, A"),
-    Field("theta_e_rad", REAL, 1, "electrical rotor angle, rad (|x| <= angle guard)"),
-    Field("omega_e_rad_s", REAL, 1, "electrical rotor speed, rad/s"),
-)
+MOTOR_INPUT_FIELDS: tuple[Field, ...] = fields("""
+    ia_a           real  1  sampled phase-a current, A
+    ib_a           real  1  sampled phase-b current, A
+    theta_e_rad    real  1  electrical rotor angle, rad (|x| <= angle guard)
+    omega_e_rad_s  real  1  electrical rotor speed, rad/s
+""")

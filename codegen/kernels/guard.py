@@ -35,102 +35,90 @@ COMMON_FAULT_DOCS: dict[str, str] = {
 }
 
 
+#: each check kind as a formula (generated comments); fields: {fields}, {field}, {limit}, {lo}, ...
+_TEXT: dict[str, str] = {
+    "phase_currents": "|{ia}|, |{ib}|, |i_c| <= {limit}, i_c = -({ia} + {ib})",
+    "all_at_least": "{joined} >= {limit}",
+    "all_at_most": "{joined} <= {limit}",
+    "abs_at_most": "|{field}| <= {limit}",
+    "index_at_most": "{field} <= {max}",
+    "real_in_range_when": "{field} in [{lo_text}, {limit}] when {index} in [{first}, {last}]",
+}
+
+
 @dataclass(frozen=True)
-class PhaseCurrents:
+class Check:
+    """One guard check: fault bit name, kind (a key of the formula table), checked fields, bounds.
+
+    ``limit`` is the constant name of the (upper) bound, ``lo`` that of the lower bound of
+    ``real_in_range_when`` (None: zero), ``max`` the largest valid value of an index field,
+    ``index``/``first``/``last`` the index field and range under which a range check applies.
+    """
+
+    fault: str
+    kind: str
+    fields: tuple[str, ...]
+    limit: str = ""
+    lo: str | None = None
+    max: int = 0
+    index: str = ""
+    first: int = 0
+    last: int = 0
+
+    @property
+    def field(self) -> str:
+        """The (first) checked field."""
+        return self.fields[0]
+
+    @property
+    def ia(self) -> str:
+        return self.fields[0]
+
+    @property
+    def ib(self) -> str:
+        return self.fields[-1]
+
+    @property
+    def hi(self) -> str:
+        return self.limit
+
+    @property
+    def text(self) -> str:
+        """The check as a formula (generated comments)."""
+        return _TEXT[self.kind].format(ia=self.ia, ib=self.ib, field=self.field, joined=", ".join(self.fields),
+                                       limit=self.limit, max=self.max, lo_text=self.lo or 0, index=self.index,
+                                       first=self.first, last=self.last)
+
+
+def PhaseCurrents(fault: str, ia: str, ib: str, limit: str) -> Check:  # noqa: N802 (a check constructor)
     """|i_a|, |i_b|, |i_c| <= limit with i_c = -(i_a + i_b)."""
-
-    fault: str
-    ia: str
-    ib: str
-    limit: str
-    kind: str = "phase_currents"
-
-    @property
-    def text(self) -> str:
-        """The check as a formula (generated comments)."""
-        return f"|{self.ia}|, |{self.ib}|, |i_c| <= {self.limit}, i_c = -({self.ia} + {self.ib})"
+    return Check(fault, "phase_currents", (ia, ib), limit)
 
 
-@dataclass(frozen=True)
-class AllAtLeast:
+def AllAtLeast(fault: str, fields: tuple[str, ...], limit: str) -> Check:  # noqa: N802
     """Every field >= limit."""
-
-    fault: str
-    fields: tuple[str, ...]
-    limit: str
-    kind: str = "all_at_least"
-
-    @property
-    def text(self) -> str:
-        """The check as a formula (generated comments)."""
-        return f"{', '.join(self.fields)} >= {self.limit}"
+    return Check(fault, "all_at_least", fields, limit)
 
 
-@dataclass(frozen=True)
-class AllAtMost:
+def AllAtMost(fault: str, fields: tuple[str, ...], limit: str) -> Check:  # noqa: N802
     """Every field <= limit."""
-
-    fault: str
-    fields: tuple[str, ...]
-    limit: str
-    kind: str = "all_at_most"
-
-    @property
-    def text(self) -> str:
-        """The check as a formula (generated comments)."""
-        return f"{', '.join(self.fields)} <= {self.limit}"
+    return Check(fault, "all_at_most", fields, limit)
 
 
-@dataclass(frozen=True)
-class AbsAtMost:
+def AbsAtMost(fault: str, field: str, limit: str) -> Check:  # noqa: N802
     """|field| <= limit."""
-
-    fault: str
-    field: str
-    limit: str
-    kind: str = "abs_at_most"
-
-    @property
-    def text(self) -> str:
-        """The check as a formula (generated comments)."""
-        return f"|{self.field}| <= {self.limit}"
+    return Check(fault, "abs_at_most", (field,), limit)
 
 
-@dataclass(frozen=True)
-class IndexAtMost:
-    """Integer field <= max."""
-
-    fault: str
-    field: str
-    max: int
-    kind: str = "index_at_most"
-
-    @property
-    def text(self) -> str:
-        """The check as a formula (generated comments)."""
-        return f"{self.field} <= {self.max}"
+def IndexAtMost(fault: str, field: str, max_value: int) -> Check:  # noqa: N802
+    """Integer field <= max_value."""
+    return Check(fault, "index_at_most", (field,), max=max_value)
 
 
-@dataclass(frozen=True)
-class RealInRangeWhen:
+def RealInRangeWhen(fault: str, field: str, lo: str | None, hi: str, index: str, first: int,  # noqa: N802
+                    last: int) -> Check:
     """Real field in [lo, hi] whenever integer field ``index`` is in [first, last] (lo None: zero)."""
-
-    fault: str
-    field: str
-    lo: str | None
-    hi: str
-    index: str
-    first: int
-    last: int
-    kind: str = "real_in_range_when"
-
-    @property
-    def text(self) -> str:
-        """The check as a formula (generated comments)."""
-        return f"{self.field} in [{self.lo or 0}, {self.hi}] when {self.index} in [{self.first}, {self.last}]"
-
-
-Check = PhaseCurrents | AllAtLeast | AllAtMost | AbsAtMost | IndexAtMost | RealInRangeWhen
+    return Check(fault, "real_in_range_when", (field,), hi, lo, index=index, first=first, last=last)
 
 
 def fault_bits(docs: Mapping[str, str], extra: tuple[str, ...] = ()) -> tuple[tuple[str, int, str], ...]:
@@ -153,19 +141,19 @@ def motor_checks() -> tuple[Check, ...]:
 
 def _ok(ops: Ops, c: Check, k: Constants, x: np.ndarray) -> np.ndarray:
     """Per record: does check ``c`` pass."""
-    if isinstance(c, PhaseCurrents):
+    if c.kind == "phase_currents":
         ia, ib, lim = x[c.ia], x[c.ib], k[c.limit]
         ic = third_phase(ops, ia, ib)
         return ops.le(ops.abs(ia), lim) & ops.le(ops.abs(ib), lim) & ops.le(ops.abs(ic), lim)
-    if isinstance(c, AllAtLeast | AllAtMost):
-        cmp = ops.ge if isinstance(c, AllAtLeast) else ops.le
+    if c.kind in ("all_at_least", "all_at_most"):
+        cmp = ops.ge if c.kind == "all_at_least" else ops.le
         ok = np.ones(len(x), bool)
         for f in c.fields:
             ok &= cmp(x[f], k[c.limit])
         return ok
-    if isinstance(c, AbsAtMost):
+    if c.kind == "abs_at_most":
         return ops.le(ops.abs(x[c.field]), k[c.limit])
-    if isinstance(c, IndexAtMost):
+    if c.kind == "index_at_most":
         return x[c.field] <= c.max
     idx, v = x[c.index], x[c.field]
     lo = ops.const(0.0) if c.lo is None else k[c.lo]

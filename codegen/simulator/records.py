@@ -20,7 +20,7 @@ from functools import cached_property
 import numpy as np
 
 from codegen.numfmt.float32 import FLOAT32
-from codegen.records import F32, F64, I32, I64, U16, Field, Record, RecordLayout
+from codegen.records import Field, Record, RecordLayout, fields
 
 __all__ = [
     "SimStruct", "StructMember", "MOTOR_STATE", "SIM_PARAMS", "SIM_STATE", "SIM_TRACE",
@@ -96,56 +96,52 @@ class SimStruct:
         return tuple(out)
 
 
-def _f(name: str, kind: str, doc: str, length: int = 1) -> Field:
-    return Field(name, kind, length, doc)
-
-
 #: Plant motor state (SI units), the first part of every plant's state.
-MOTOR_STATE = SimStruct("pmsm_state_t", "plant motor state (dq frame, d axis on the magnet)", Record("pmsm_state", (
-    _f("i_d_a", F64, "d-axis stator current, A"),
-    _f("i_q_a", F64, "q-axis stator current, A"),
-    _f("omega_m_rad_s", F64, "mechanical rotor speed, rad/s"),
-    _f("theta_e_rad", F64, "electrical rotor angle, rad, in [0, 2*pi) between calls"),
-)))
+MOTOR_STATE = SimStruct("pmsm_state_t", "plant motor state (dq frame, d axis on the magnet)", Record("pmsm_state", fields("""
+    i_d_a          f64   1  d-axis stator current, A
+    i_q_a          f64   1  q-axis stator current, A
+    omega_m_rad_s  f64   1  mechanical rotor speed, rad/s
+    theta_e_rad    f64   1  electrical rotor angle, rad, in [0, 2*pi) between calls
+""")))
 
 #: Parameters every simulator takes: motor, stiff DC link, timing, speed PI (SI units).
-SIM_PARAMS = SimStruct("sim_params_t", "motor, DC link, timing, speed loop (every topology)", Record("sim_params", (
-    _f("rs_ohm", F64, "stator resistance Rs, ohm"),
-    _f("ld_h", F64, "d-axis inductance Ld, H"),
-    _f("lq_h", F64, "q-axis inductance Lq, H"),
-    _f("psi_f_wb", F64, "permanent-magnet flux linkage psi_f, Wb"),
-    _f("pole_pairs", I32, "pole pairs p"),
-    _f("j_kgm2", F64, "rotor + load inertia J, kg*m^2 (> 0 unless the speed is imposed)"),
-    _f("b_nms", F64, "viscous friction B, N*m*s/rad"),
-    _f("udc_v", F64, "DC-link voltage Udc, V (stiff source)"),
-    _f("dt_s", F64, "control (sampling) period, s"),
-    _f("kp", F64, "speed PI proportional gain, N*m/(rad/s)"),
-    _f("ki", F64, "speed PI integral gain, N*m/rad"),
-    _f("limit_nm", F64, "speed PI output and integrator clamp, +-N*m"),
-    _f("speed_imposed", I32, "1: omega_m follows speed_ref, T* = load_nm"),
-)))
+SIM_PARAMS = SimStruct("sim_params_t", "motor, DC link, timing, speed loop (every topology)", Record("sim_params", fields("""
+    rs_ohm         f64   1  stator resistance Rs, ohm
+    ld_h           f64   1  d-axis inductance Ld, H
+    lq_h           f64   1  q-axis inductance Lq, H
+    psi_f_wb       f64   1  permanent-magnet flux linkage psi_f, Wb
+    pole_pairs     i32   1  pole pairs p
+    j_kgm2         f64   1  rotor + load inertia J, kg*m^2 (> 0 unless the speed is imposed)
+    b_nms          f64   1  viscous friction B, N*m*s/rad
+    udc_v          f64   1  DC-link voltage Udc, V (stiff source)
+    dt_s           f64   1  control (sampling) period, s
+    kp             f64   1  speed PI proportional gain, N*m/(rad/s)
+    ki             f64   1  speed PI integral gain, N*m/rad
+    limit_nm       f64   1  speed PI output and integrator clamp, +-N*m
+    speed_imposed  i32   1  1: omega_m follows speed_ref, T* = load_nm
+""")))
 
 #: State every simulator carries from one run call to the next (chunked runs).
-SIM_STATE = SimStruct("sim_state_t", "carried state every topology has", Record("sim_state", (
-    _f("pi_integral_nm", F64, "speed PI integrator, N*m"),
-    _f("k", I64, "index of the next period (t = k*dt_s)"),
-)), nested=(("motor", MOTOR_STATE),))
+SIM_STATE = SimStruct("sim_state_t", "carried state every topology has", Record("sim_state", fields("""
+    pi_integral_nm  f64   1  speed PI integrator, N*m
+    k               i64   1  index of the next period (t = k*dt_s)
+""")), nested=(("motor", MOTOR_STATE),))
 
 #: Trace members every simulator records at the sample instant t_k (one value per period).
-SIM_TRACE = SimStruct("sim_trace_t", "sample-instant values and decision every topology records", Record("sim_trace", (
-    _f("t_s", F64, "k*dt_s, s"),
-    _f("speed_ref_rad_s", F64, "mechanical speed reference, rad/s"),
-    _f("omega_m_rad_s", F64, "plant mechanical speed, rad/s"),
-    _f("te_nm", F64, "plant torque, N*m"),
-    _f("torque_ref_nm", F64, "T* given to the controller (double, before the float cast), N*m"),
-    _f("psi_wb", F64, "plant stator-flux magnitude, Wb"),
-    _f("ia_a", F64, "plant phase current a, A"),
-    _f("ib_a", F64, "plant phase current b, A"),
-    _f("ic_a", F64, "plant phase current c = -i_a - i_b, A"),
-    _f("theta_e_rad", F64, "plant electrical angle in [0, 2*pi), rad"),
-    _f("vector", U16, "controller decision out.vector"),
-    _f("n_eval", U16, "out.n_eval (candidates evaluated, Cal)"),
-    _f("fault", U16, "out.fault bits"),
-    _f("te_est_nm", F32, "out.te_est_nm (controller torque estimate), N*m"),
-    _f("psi_est_wb", F32, "out.psi_est_wb (controller flux estimate), Wb"),
-)), pointers=True)
+SIM_TRACE = SimStruct("sim_trace_t", "sample-instant values and decision every topology records", Record("sim_trace", fields("""
+    t_s              f64   1  k*dt_s, s
+    speed_ref_rad_s  f64   1  mechanical speed reference, rad/s
+    omega_m_rad_s    f64   1  plant mechanical speed, rad/s
+    te_nm            f64   1  plant torque, N*m
+    torque_ref_nm    f64   1  T* given to the controller (double, before the float cast), N*m
+    psi_wb           f64   1  plant stator-flux magnitude, Wb
+    ia_a             f64   1  plant phase current a, A
+    ib_a             f64   1  plant phase current b, A
+    ic_a             f64   1  plant phase current c = -i_a - i_b, A
+    theta_e_rad      f64   1  plant electrical angle in [0, 2*pi), rad
+    vector           u16   1  controller decision out.vector
+    n_eval           u16   1  out.n_eval (candidates evaluated, Cal)
+    fault            u16   1  out.fault bits
+    te_est_nm        f32   1  out.te_est_nm (controller torque estimate), N*m
+    psi_est_wb       f32   1  out.psi_est_wb (controller flux estimate), Wb
+""")), pointers=True)

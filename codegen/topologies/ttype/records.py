@@ -22,42 +22,42 @@ import numpy as np
 
 from ...kernels.guard import AllAtLeast, AllAtMost, Check, IndexAtMost, RealInRangeWhen, fault_bits, motor_checks
 from ...numfmt.float32 import FLOAT32
-from ...records import MOTOR_INPUT_FIELDS, REAL, U16, Field, Record
+from ...records import MOTOR_INPUT_FIELDS, Field, Record, fields
 
 #: segments per period (a virtual vector's 7-segment sequence)
 N_SEGMENTS = 7
 #: most costs a step evaluates: 19 voltage groups of 27-MPDTC (63-MPDTC: 3..7)
 N_MAX_EVAL = 19
 
-INPUT_FIELDS: tuple[Field, ...] = MOTOR_INPUT_FIELDS + (
-    Field("uc1_v", REAL, 1, "upper DC-link capacitor voltage, V"),
-    Field("uc2_v", REAL, 1, "lower DC-link capacitor voltage, V (Udc = uc1 + uc2, V_o = (uc1 - uc2)/2)"),
-    Field("torque_ref_nm", REAL, 1, "torque reference T*, N*m (speed-loop output)"),
-    Field("prev_vector", U16, 1, "vector id 0..62 applied in the current period"),
-    Field("t_n_prev_s", REAL, 1, "T_N of the current period, s (used if prev_vector is virtual)"),
-)
+INPUT_FIELDS: tuple[Field, ...] = MOTOR_INPUT_FIELDS + fields("""
+    uc1_v          real  1  upper DC-link capacitor voltage, V
+    uc2_v          real  1  lower DC-link capacitor voltage, V (Udc = uc1 + uc2, V_o = (uc1 - uc2)/2)
+    torque_ref_nm  real  1  torque reference T*, N*m (speed-loop output)
+    prev_vector    u16   1  vector id 0..62 applied in the current period
+    t_n_prev_s     real  1  T_N of the current period, s (used if prev_vector is virtual)
+""")
 
-OUTPUT_FIELDS: tuple[Field, ...] = (
-    Field("te_est_nm", REAL, 1, "predicted torque at k+1, N*m"),
-    Field("psi_est_wb", REAL, 1, "predicted stator-flux magnitude at k+1, Wb"),
-    Field("psi_ref_wb", REAL, 1, "flux reference psi* (MTPA), Wb"),
-    Field("vo_v", REAL, 1, "measured neutral-point voltage V_o(k) = (uc1 - uc2)/2, V"),
-    Field("vo_pred_v", REAL, 1, "predicted V_o(k+1) under the applied vector, V"),
-    Field("u_ref_alpha_v", REAL, 1, "deadbeat reference voltage u*, alpha, V"),
-    Field("u_ref_beta_v", REAL, 1, "deadbeat reference voltage u*, beta, V"),
-    Field("t_n_s", REAL, 1, "T_N of the chosen vector, s (0 for a basic state)"),
-    Field("cost_best", REAL, 1, "cost of the chosen candidate"),
-    Field("costs", REAL, N_MAX_EVAL, "cost of group j, evaluation order; 0 beyond n_eval"),
-    Field("seg_s", REAL, N_SEGMENTS, "segment times, s (sum Ts; see module doc)"),
-    Field("states", U16, N_SEGMENTS, "switching state 0..26 of each segment"),
-    Field("vector", U16, 1, "chosen vector id 0..62"),
-    Field("n_eval", U16, 1, "costs evaluated (= voltage groups of the row)"),
-    Field("n_groups", U16, 1, "voltage groups in the candidate row"),
-    Field("n_members", U16, 1, "candidate vectors whose V_o(k+2) was predicted"),
-    Field("sector", U16, 1, "12-sector of u*, 1-based (0: fault)"),
-    Field("fault", U16, 1, "fault bits (FAULT_* below); nonzero => safe decision"),
-    Field("cand", U16, N_MAX_EVAL, "resolved member (vector id) of group j; 0 beyond n_eval"),
-)
+OUTPUT_FIELDS: tuple[Field, ...] = fields("""
+    te_est_nm      real  1           predicted torque at k+1, N*m
+    psi_est_wb     real  1           predicted stator-flux magnitude at k+1, Wb
+    psi_ref_wb     real  1           flux reference psi* (MTPA), Wb
+    vo_v           real  1           measured neutral-point voltage V_o(k) = (uc1 - uc2)/2, V
+    vo_pred_v      real  1           predicted V_o(k+1) under the applied vector, V
+    u_ref_alpha_v  real  1           deadbeat reference voltage u*, alpha, V
+    u_ref_beta_v   real  1           deadbeat reference voltage u*, beta, V
+    t_n_s          real  1           T_N of the chosen vector, s (0 for a basic state)
+    cost_best      real  1           cost of the chosen candidate
+    costs          real  N_MAX_EVAL  cost of group j, evaluation order; 0 beyond n_eval
+    seg_s          real  N_SEGMENTS  segment times, s (sum Ts; see module doc)
+    states         u16   N_SEGMENTS  switching state 0..26 of each segment
+    vector         u16   1           chosen vector id 0..62
+    n_eval         u16   1           costs evaluated (= voltage groups of the row)
+    n_groups       u16   1           voltage groups in the candidate row
+    n_members      u16   1           candidate vectors whose V_o(k+2) was predicted
+    sector         u16   1           12-sector of u*, 1-based (0: fault)
+    fault          u16   1           fault bits (FAULT_* below); nonzero => safe decision
+    cand           u16   N_MAX_EVAL  resolved member (vector id) of group j; 0 beyond n_eval
+""", N_MAX_EVAL=N_MAX_EVAL, N_SEGMENTS=N_SEGMENTS)
 
 #: first virtual vector id; ids above N_IDS - 1 are not vectors
 FIRST_VIRTUAL = 27

@@ -30,7 +30,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from codegen.model import Model
-from codegen.records import F32, F64, I32, U16, Field, Record
+from codegen.records import Record, fields
 from codegen.simulator import api
 from codegen.simulator.driver import (
     DEFAULT_CHUNK,
@@ -49,31 +49,31 @@ N_SEG = 7
 #: State index of OOO (applied before the first decision).
 OOO = 13
 
-PARAMS = SimStruct("ttype_sim_params_t", "T-type simulator parameters", Record("ttype_sim_params", (
-    Field("c_f", F64, 1, "each DC-link capacitor C1 = C2, F"),
-    Field("substep_max_s", F64, 1, "largest RK4 sub-step, s (1e-6)"),
-)), base=SIM_PARAMS)
+PARAMS = SimStruct("ttype_sim_params_t", "T-type simulator parameters", Record("ttype_sim_params", fields("""
+    c_f            f64   1  each DC-link capacitor C1 = C2, F
+    substep_max_s  f64   1  largest RK4 sub-step, s (1e-6)
+""")), base=SIM_PARAMS)
 
-STATE = SimStruct("ttype_sim_state_t", "T-type carried state", Record("ttype_sim_state", (
-    Field("vo_v", F64, 1, "plant neutral-point voltage (u_c1 - u_c2)/2, V"),
-    Field("applied_vector", I32, 1, "vector (0..62) applied in the current period"),
-    Field("applied_t_n_s", F64, 1, "its T_N, s (as the controller gave it)"),
-    Field("applied_states", U16, N_SEG, "its states per segment, 0..26"),
-    Field("applied_seg_s", F64, N_SEG, "its segment durations, s (sum = dt_s)"),
-    Field("last_state", I32, 1, "state at the end of the previous period (13 = OOO)"),
-)), base=SIM_STATE)
+STATE = SimStruct("ttype_sim_state_t", "T-type carried state", Record("ttype_sim_state", fields("""
+    vo_v            f64   1      plant neutral-point voltage (u_c1 - u_c2)/2, V
+    applied_vector  i32   1      vector (0..62) applied in the current period
+    applied_t_n_s   f64   1      its T_N, s (as the controller gave it)
+    applied_states  u16   N_SEG  its states per segment, 0..26
+    applied_seg_s   f64   N_SEG  its segment durations, s (sum = dt_s)
+    last_state      i32   1      state at the end of the previous period (13 = OOO)
+""", N_SEG=N_SEG)), base=SIM_STATE)
 
-TRACE = SimStruct("ttype_sim_trace_t", "T-type trace", Record("ttype_sim_trace", (
-    Field("vo_v", F64, 1, "plant neutral-point voltage at t_k, V"),
-    Field("t_n_s", F32, 1, "out.t_n_s (T_N of the decision), s"),
-    Field("psi_ref_wb", F32, 1, "out.psi_ref_wb (the controller's flux reference), Wb"),
-    Field("vo_est_v", F32, 1, "out.vo_v (the controller's V_o), V"),
-    Field("applied_vector", U16, 1, "vector applied during [t_k, t_k+1) (decision of k-1)"),
-    Field("leg_changes", U16, 1, "one-level leg changes of the applied period"),
-    Field("uab_v", F64, N_SEG, "u_ab per applied segment (V_o at the segment start), V"),
-    Field("seg_s", F64, N_SEG, "applied segment durations, s (0: skipped)"),
-    Field("seg_states", U16, N_SEG, "applied states per segment"),
-)), base=SIM_TRACE, pointers=True)
+TRACE = SimStruct("ttype_sim_trace_t", "T-type trace", Record("ttype_sim_trace", fields("""
+    vo_v            f64   1      plant neutral-point voltage at t_k, V
+    t_n_s           f32   1      out.t_n_s (T_N of the decision), s
+    psi_ref_wb      f32   1      out.psi_ref_wb (the controller's flux reference), Wb
+    vo_est_v        f32   1      out.vo_v (the controller's V_o), V
+    applied_vector  u16   1      vector applied during [t_k, t_k+1) (decision of k-1)
+    leg_changes     u16   1      one-level leg changes of the applied period
+    uab_v           f64   N_SEG  u_ab per applied segment (V_o at the segment start), V
+    seg_s           f64   N_SEG  applied segment durations, s (0: skipped)
+    seg_states      u16   N_SEG  applied states per segment
+""", N_SEG=N_SEG)), base=SIM_TRACE, pointers=True)
 
 SIM = api.SimApi("ttype", PARAMS, STATE, TRACE, Path(__file__).resolve().parent / "csrc", {
     -1: "invalid simulator arguments (motor/inverter/speed-loop parameters)",

@@ -10,35 +10,35 @@ import numpy as np
 
 from ...kernels.guard import AllAtLeast, AllAtMost, Check, IndexAtMost, fault_bits, motor_checks
 from ...numfmt.float32 import FLOAT32
-from ...records import MOTOR_INPUT_FIELDS, REAL, U16, Field, Record
+from ...records import MOTOR_INPUT_FIELDS, Field, Record, fields
 
 #: Number of basic voltage vectors V0..V6 (the most candidates a step can evaluate).
 N_VECTORS = 7
 
 
-INPUT_FIELDS: tuple[Field, ...] = MOTOR_INPUT_FIELDS + (
-    Field("udc_v", REAL, 1, "measured DC-link voltage, V"),
-    Field("torque_ref_nm", REAL, 1, "torque reference T*, N*m (speed-loop output)"),
-    Field("prev_sw", U16, 1, "switching state applied in the current period, Sa*4+Sb*2+Sc"),
-)
+INPUT_FIELDS: tuple[Field, ...] = MOTOR_INPUT_FIELDS + fields("""
+    udc_v          real  1  measured DC-link voltage, V
+    torque_ref_nm  real  1  torque reference T*, N*m (speed-loop output)
+    prev_sw        u16   1  switching state applied in the current period, Sa*4+Sb*2+Sc
+""")
 
-OUTPUT_FIELDS: tuple[Field, ...] = (
-    Field("te_est_nm", REAL, 1, "estimated torque at k (k+1 with delay compensation), N*m"),
-    Field("psi_est_wb", REAL, 1, "estimated stator-flux magnitude at k (k+1), Wb"),
-    Field("psi_alpha_wb", REAL, 1, "stator flux alpha, Wb"),
-    Field("psi_beta_wb", REAL, 1, "stator flux beta, Wb"),
-    Field("sin_theta", REAL, 1, "sin(theta_e) from the generated polynomial"),
-    Field("cos_theta", REAL, 1, "cos(theta_e) from the generated polynomial"),
-    Field("cost_best", REAL, 1, "cost of the chosen candidate (0 if none evaluated)"),
-    Field("costs", REAL, N_VECTORS, "cost of candidate j, in evaluation order; 0 beyond n_eval"),
-    Field("sw", U16, 1, "chosen switching state Sa*4+Sb*2+Sc"),
-    Field("vector", U16, 1, "chosen vector index 0..6 (V0 realised as 000 or 111)"),
-    Field("n_eval", U16, 1, "costs evaluated in this step (Cal)"),
-    Field("fault", U16, 1, "fault bits (FAULT_* below); nonzero => safe decision"),
-    Field("sector", U16, 1, "flux sector used, 1-based (0: none used)"),
-    Field("condition", U16, 1, "table condition row used, 1-based (0: none)"),
-    Field("cand", U16, N_VECTORS, "candidate vector j in evaluation order; 0 beyond n_eval"),
-)
+OUTPUT_FIELDS: tuple[Field, ...] = fields("""
+    te_est_nm     real  1          estimated torque at k (k+1 with delay compensation), N*m
+    psi_est_wb    real  1          estimated stator-flux magnitude at k (k+1), Wb
+    psi_alpha_wb  real  1          stator flux alpha, Wb
+    psi_beta_wb   real  1          stator flux beta, Wb
+    sin_theta     real  1          sin(theta_e) from the generated polynomial
+    cos_theta     real  1          cos(theta_e) from the generated polynomial
+    cost_best     real  1          cost of the chosen candidate (0 if none evaluated)
+    costs         real  N_VECTORS  cost of candidate j, in evaluation order; 0 beyond n_eval
+    sw            u16   1          chosen switching state Sa*4+Sb*2+Sc
+    vector        u16   1          chosen vector index 0..6 (V0 realised as 000 or 111)
+    n_eval        u16   1          costs evaluated in this step (Cal)
+    fault         u16   1          fault bits (FAULT_* below); nonzero => safe decision
+    sector        u16   1          flux sector used, 1-based (0: none used)
+    condition     u16   1          table condition row used, 1-based (0: none)
+    cand          u16   N_VECTORS  candidate vector j in evaluation order; 0 beyond n_eval
+""", N_VECTORS=N_VECTORS)
 
 #: The input guard as data (numerics.md "Inputs are guarded"), evaluated by codegen.kernels.guard.
 GUARD: tuple[Check, ...] = motor_checks() + (

@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from codegen.model import Model
-from codegen.records import I32, U16, Field, Record
+from codegen.records import Record, fields
 from codegen.simulator import api
 from codegen.simulator.driver import (
     DEFAULT_CHUNK,
@@ -40,19 +40,19 @@ from codegen.simulator.driver import (
 from codegen.simulator.records import SIM_PARAMS, SIM_STATE, SIM_TRACE, SimStruct
 from codegen.topologies.twolevel.records import INPUT_DTYPE
 
-PARAMS = SimStruct("twolevel_sim_params_t", "two-level simulator parameters", Record("twolevel_sim_params", (
-    Field("substeps", I32, 1, "RK4 sub-steps per period (dt_s/substeps <= 1 us)"),
-    Field("delay_compensation", I32, 1, "0: decision of k applied in period k; 1: in period k+1"),
-)), base=SIM_PARAMS)
+PARAMS = SimStruct("twolevel_sim_params_t", "two-level simulator parameters", Record("twolevel_sim_params", fields("""
+    substeps            i32   1  RK4 sub-steps per period (dt_s/substeps <= 1 us)
+    delay_compensation  i32   1  0: decision of k applied in period k; 1: in period k+1
+""")), base=SIM_PARAMS)
 
-STATE = SimStruct("twolevel_sim_state_t", "two-level carried state", Record("twolevel_sim_state", (
-    Field("prev_sw", I32, 1, "decision of the previous period, Sa*4+Sb*2+Sc"),
-)), base=SIM_STATE)
+STATE = SimStruct("twolevel_sim_state_t", "two-level carried state", Record("twolevel_sim_state", fields("""
+    prev_sw  i32   1  decision of the previous period, Sa*4+Sb*2+Sc
+""")), base=SIM_STATE)
 
-TRACE = SimStruct("twolevel_sim_trace_t", "two-level trace", Record("twolevel_sim_trace", (
-    Field("sw", U16, 1, "controller decision out.sw, Sa*4+Sb*2+Sc"),
-    Field("applied_sw", U16, 1, "state the inverter holds during [t_k, t_k+1)"),
-)), base=SIM_TRACE, pointers=True)
+TRACE = SimStruct("twolevel_sim_trace_t", "two-level trace", Record("twolevel_sim_trace", fields("""
+    sw          u16   1  controller decision out.sw, Sa*4+Sb*2+Sc
+    applied_sw  u16   1  state the inverter holds during [t_k, t_k+1)
+""")), base=SIM_TRACE, pointers=True)
 
 SIM = api.SimApi("twolevel", PARAMS, STATE, TRACE, Path(__file__).resolve().parent / "csrc", {
     -1: "invalid simulator arguments (motor/inverter/speed-loop parameters)",
