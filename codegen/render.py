@@ -8,6 +8,7 @@ target.
 """
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -106,6 +107,11 @@ def step_context(model: Model, target: str, records: tuple[Record, Record],
         "output_fields": records[1].bind(nf).members,
         **values,
     }
+
+
+def table_fields(tables: object) -> dict[str, object]:
+    """The derived tables' dataclass fields by name, to spread into a step context."""
+    return {f.name: getattr(tables, f.name) for f in dataclasses.fields(tables)}  # type: ignore[arg-type]
 
 
 def render_step(model: Model, topology_dir: str, ctx: dict) -> dict[str, str]:

@@ -1,8 +1,9 @@
 """The topology interface: what every inverter topology provides, and the registry.
 
 A topology (two-level, T-type) is a plugin package under
-``codegen/topologies/`` whose ``plugin`` module exports ``PLUGIN``, an object
-implementing :class:`Topology`.  The stages (generate, verify, simulate,
+``codegen/topologies/`` whose ``plugin`` module implements :class:`Topology`:
+the module itself is the plugin (module-level constants and functions, checked
+against the protocol by mypy).  The stages (generate, verify, simulate,
 bench, tables, firmware, hil) call only this interface and contain no
 topology branch: they take the plugin of the config's
 ``inverter.topology`` from :func:`topology_of`.  A command a topology cannot
@@ -15,6 +16,7 @@ depend on no topology package.
 from __future__ import annotations
 
 import importlib
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -26,7 +28,7 @@ from codegen.hostbuild import HostLib
 from codegen.model import Model
 from codegen.records import Record
 
-__all__ = ["Topology", "Trajectory", "topology_of", "topology", "TOPOLOGIES"]
+__all__ = ["Topology", "Trajectory", "record_trajectory", "topology_of", "topology", "TOPOLOGIES"]
 
 Log = Callable[[str], None]
 Progress = Callable[[float], None]
@@ -117,7 +119,17 @@ class Topology(Protocol):
         ...
 
 
-#: ``inverter.topology`` value -> module exporting ``PLUGIN``
+def record_trajectory(base: Model, lib: HostLib, run: Callable[..., Any],
+                      inputs: Callable[[Any, Model], np.ndarray], progress: Progress | None = None) -> Trajectory:
+    """Run ``base``'s scenario through ``lib`` (``run(ffi, lib, model, progress=...)``) and keep the
+    controller inputs it fed the step, with the run's wall time."""
+    t0 = time.perf_counter()
+    trace = run(lib.ffi, lib.lib, base, progress=progress)
+    wall = time.perf_counter() - t0
+    return Trajectory(inputs(trace, base), wall, trace.n)
+
+
+#: ``inverter.topology`` value -> the plugin module
 TOPOLOGIES: dict[str, str] = {
     "two-level": "codegen.topologies.twolevel.plugin",
     "t-type": "codegen.topologies.ttype.plugin",
@@ -130,7 +142,7 @@ def topology(name: str) -> Topology:
         module = TOPOLOGIES[name]
     except KeyError:
         raise ValueError(f"unknown topology {name!r}; allowed: {', '.join(TOPOLOGIES)}") from None
-    plugin: Topology = importlib.import_module(module).PLUGIN
+    plugin: Topology = importlib.import_module(module)  # type: ignore[assignment]
     return plugin
 
 

@@ -48,13 +48,12 @@ from typing import Any
 import numpy as np
 
 from codegen.kernels import dq, frames
-from codegen.kernels.batch import run_batch, zero_faulted
+from codegen.kernels.batch import begin_step, run_batch
 from codegen.kernels.consts import Constants
 from codegen.kernels.guard import evaluate
 from codegen.kernels.sector import sector12
 from codegen.kernels.trig import sincos
 from codegen.numfmt import Ops, number_format
-from codegen.records import REAL
 from codegen.topologies.ttype.derive import DQ, ThreeLevelTables
 from codegen.topologies.ttype.records import FAULT, GUARD, INPUT, N_MAX_EVAL, N_SEGMENTS, OUTPUT, SAFE_STATE
 
@@ -103,16 +102,9 @@ class _Midpoint:
 
 
 def _step(t: ThreeLevelTables, x: np.ndarray) -> np.ndarray:
-    nf = number_format(t.number_format)
-    o = nf.ops
-    k = Constants(t.consts)
-    n = len(x)
-    out = OUTPUT.bind(nf).zeros(n)
-    fault = guard(t, x)
-    ok = fault == 0
     # faulted lanes compute on zeros (their outputs are overwritten below)
-    zf = o.const(0.0)
-    inp = zero_faulted(o, ok, x, INPUT.fields, REAL)
+    f = begin_step(t.number_format, t.consts, x, guard(t, x), INPUT, OUTPUT)
+    o, k, n, out, fault, ok, zf, inp = f.o, f.k, f.n, f.out, f.fault, f.ok, f.zero, f.inp
     ia, ib, th, om = inp["ia_a"], inp["ib_a"], inp["theta_e_rad"], inp["omega_e_rad_s"]
     uc1, uc2, tref = inp["uc1_v"], inp["uc2_v"], inp["torque_ref_nm"]
     pv, tnp = inp["prev_vector"], inp["t_n_prev_s"]
@@ -264,7 +256,7 @@ def _step(t: ThreeLevelTables, x: np.ndarray) -> np.ndarray:
     out["cand"] = cand
     bad = ~ok
     if bad.any():
-        safe = OUTPUT.bind(nf).zeros(1)
+        safe = OUTPUT.bind(f.nf).zeros(1)
         safe["states"] = SAFE_STATE
         safe["vector"] = SAFE_STATE
         safe["seg_s"][0, 0] = k.TS_S

@@ -6,7 +6,7 @@ only in placement attributes and comments, the arithmetic is identical.
 from __future__ import annotations
 
 from codegen.model import Model
-from codegen.render import TableRow, render_step, render_step_cdef, step_context
+from codegen.render import TableRow, render_step, render_step_cdef, step_context, table_fields
 from codegen.topologies.ttype import virtual as vv
 from codegen.topologies.ttype.derive import DQ, ThreeLevelTables
 from codegen.topologies.ttype.records import (
@@ -36,32 +36,11 @@ def three_level_context(model: Model, t: ThreeLevelTables, target: str) -> dict:
         if vv.is_virtual(i):
             label += " " + vv.virtual_of(i).sequence_names()
         seq.append(TableRow(tuple(s), label))
-    return step_context(
-        model, target, (INPUT, OUTPUT), FAULT_BITS,
-        topology_macro="MPC_TOPOLOGY_THREE_LEVEL",
-        guard=GUARD,
-        dq=DQ,
-        first_virtual=FIRST_VIRTUAL,
-        strategy=t.strategy,
-        consts=t.consts,
-        io_a=t.io_a,
-        io_b=t.io_b,
-        io_c=t.io_c,
-        ux=t.ux,
-        uy=t.uy,
-        seq=seq,
-        end_state=t.end_state,
-        n_sectors=t.n_sectors,
-        groups=groups,
-        group_n=t.group_n,
-        max_members=mm,
-        rows=rows,
-        row_n=t.row_n,
-        max_groups=mg,
-        n_segments=N_SEGMENTS,
-        n_max_eval=N_MAX_EVAL,
-        safe_state=SAFE_STATE,
-    )
+    return step_context(model, target, (INPUT, OUTPUT), FAULT_BITS, **{
+        **table_fields(t), "topology_macro": "MPC_TOPOLOGY_THREE_LEVEL", "guard": GUARD, "dq": DQ,
+        "first_virtual": FIRST_VIRTUAL, "seq": seq, "groups": groups, "group_n": t.group_n,
+        "max_members": mm, "rows": rows, "row_n": t.row_n, "max_groups": mg, "n_segments": N_SEGMENTS,
+        "n_max_eval": N_MAX_EVAL, "safe_state": SAFE_STATE})
 
 
 def render_three_level(model: Model, tables: ThreeLevelTables, target: str) -> dict[str, str]:

@@ -173,8 +173,3 @@ def controller_inputs(trace: Any, model: Model) -> np.ndarray:
     rec["t_n_prev_s"] = t_n_prev
     return rec
 
-
-# Names the plugin (codegen/topologies/ttype/plugin.py) still calls; the
-# topology is named by its package, so these are the same functions.
-run_closed_loop3 = run_closed_loop
-controller_inputs3 = controller_inputs

@@ -18,13 +18,12 @@ from typing import Any
 import numpy as np
 
 from codegen.kernels import dq, frames
-from codegen.kernels.batch import run_batch, zero_faulted
+from codegen.kernels.batch import begin_step, run_batch
 from codegen.kernels.consts import Constants
 from codegen.kernels.guard import evaluate
 from codegen.kernels.sector import sector12
 from codegen.kernels.trig import sincos
 from codegen.numfmt import number_format
-from codegen.records import REAL
 from codegen.topologies.twolevel.derive import DQ, TwoLevelTables
 from codegen.topologies.twolevel.records import FAULT, GUARD, INPUT, N_VECTORS, OUTPUT
 
@@ -40,16 +39,9 @@ def step_batch(t: TwoLevelTables, x: np.ndarray) -> np.ndarray:
 
 
 def _step(t: TwoLevelTables, x: np.ndarray) -> np.ndarray:
-    nf = number_format(t.number_format)
-    o = nf.ops
-    k = Constants(t.consts)
-    n = len(x)
-    out = OUTPUT.bind(nf).zeros(n)
-    fault = guard(t, x)
-    ok = fault == 0
     # faulted lanes compute on zeros (their outputs are overwritten below)
-    zf = o.const(0.0)
-    inp = zero_faulted(o, ok, x, INPUT.fields, REAL)
+    f = begin_step(t.number_format, t.consts, x, guard(t, x), INPUT, OUTPUT)
+    o, k, n, out, fault, ok, zf, inp = f.o, f.k, f.n, f.out, f.fault, f.ok, f.zero, f.inp
     ia, ib, th, om = inp["ia_a"], inp["ib_a"], inp["theta_e_rad"], inp["omega_e_rad_s"]
     udc, tref, prev_sw = inp["udc_v"], inp["torque_ref_nm"], inp["prev_sw"]
 
@@ -175,6 +167,6 @@ def _step(t: TwoLevelTables, x: np.ndarray) -> np.ndarray:
     # safe decision on a tripped guard: everything zero but the fault bits
     bad = ~ok
     if bad.any():
-        out[bad] = OUTPUT.bind(nf).zeros(1)
+        out[bad] = OUTPUT.bind(f.nf).zeros(1)
         out["fault"] = fault
     return out

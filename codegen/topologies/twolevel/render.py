@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from codegen.model import Model
-from codegen.render import TableRow, render_step, render_step_cdef, step_context
+from codegen.render import TableRow, render_step, render_step_cdef, step_context, table_fields
 from codegen.topologies.twolevel.derive import DQ, TwoLevelTables
 from codegen.topologies.twolevel.records import FAULT_BITS, GUARD, INPUT, N_VECTORS, OUTPUT
 
@@ -23,27 +23,9 @@ def two_level_context(model: Model, t: TwoLevelTables, target: str) -> dict:
         TableRow(tuple(r) + (0,) * (N_VECTORS - len(r)), f"{lab}: " + " ".join(f"V{v}" for v in r))
         for r, lab in zip(t.rows, _row_labels(t))
     ]
-    return step_context(
-        model, target, (INPUT, OUTPUT), FAULT_BITS,
-        topology_macro="MPC_TOPOLOGY_TWO_LEVEL",
-        guard=GUARD,
-        dq=DQ,
-        strategy=t.strategy,
-        predictor=t.predictor,
-        delay_compensation=t.delay_compensation,
-        consts=t.consts,
-        ux=t.ux,
-        uy=t.uy,
-        vec_to_sw=t.vec_to_sw,
-        sw_to_vec=t.sw_to_vec,
-        zero_sw=t.zero_sw,
-        n_sectors=t.n_sectors,
-        uses_threshold=t.uses_threshold,
-        rows=t.rows,
-        rows_padded=rows,
-        row_len=t.row_len,
-        n_vectors=N_VECTORS,
-    )
+    return step_context(model, target, (INPUT, OUTPUT), FAULT_BITS, **{
+        **table_fields(t), "topology_macro": "MPC_TOPOLOGY_TWO_LEVEL", "guard": GUARD, "dq": DQ,
+        "rows_padded": rows, "row_len": t.row_len, "n_vectors": N_VECTORS})
 
 
 def render_two_level(model: Model, t: TwoLevelTables, target: str) -> dict[str, str]:

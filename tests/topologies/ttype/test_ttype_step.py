@@ -9,12 +9,12 @@ import pytest
 
 from codegen.config import load_config
 from codegen.stages.verify import verify_strategy
+from codegen.topologies.ttype import plugin as PLUGIN
 from codegen.topologies.ttype import reference
 from codegen.topologies.ttype import transitions as tr
 from codegen.topologies.ttype import vectors as v
 from codegen.topologies.ttype import virtual as vv
 from codegen.topologies.ttype.derive import t_n_min
-from codegen.topologies.ttype.plugin import PLUGIN
 from codegen.topologies.ttype.records import FAULT, INPUT_DTYPE, SAFE_STATE
 from codegen.topologies.ttype.states import adversarial_states, random_states
 
