@@ -12,7 +12,7 @@ from codegen import __version__
 from codegen.model import Model
 from codegen.render import PROFILES
 
-__all__ = ["header", "constants_section", "memory_section", "guard_section", "bullets"]
+__all__ = ["header", "constants_section", "memory_section", "guard_section", "bullets", "document"]
 
 
 def header(model: Model, target: str, title: str, settings: str) -> list[str]:
@@ -55,3 +55,13 @@ def guard_section(fault_bits: Iterable[tuple[str, int, str]], safe: str) -> list
 def bullets(title: str, items: Iterable[str]) -> list[str]:
     """A titled bullet list."""
     return ["", f"## {title}", "", *[f"- {i}" for i in items]]
+
+
+def document(model: Model, target: str, title: str, settings: str, consts: Iterable[Any],
+             tables: list[str], table_bytes: Mapping[str, int], fault_bits: Iterable[tuple[str, int, str]],
+             safe: str, assumptions: Iterable[str]) -> str:
+    """The whole report: header, constants, the topology's ``tables`` section lines, memory, guard,
+    assumptions."""
+    lines = header(model, target, title, settings) + constants_section(consts) + tables
+    lines += memory_section(table_bytes) + guard_section(fault_bits, safe) + bullets("Assumptions", assumptions)
+    return "\n".join(lines) + "\n"

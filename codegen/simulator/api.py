@@ -10,11 +10,14 @@ derive from the same field lists.
 from __future__ import annotations
 
 import hashlib
+import importlib
 import os
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
 from codegen import __version__
+from codegen.hostbuild import SimSources, cache_root
 from codegen.simulator.records import MOTOR_STATE, SIM_PARAMS, SIM_STATE, SIM_TRACE, SimStruct
 
 #: C sources of the shared dq model, RK4, speed PI and period steps (float64, host only).
@@ -71,7 +74,6 @@ def render_header(api: SimApi) -> str:
 
 def header_path(api: SimApi) -> Path:
     """Render ``sim_api.h`` into the build cache (content-addressed); return its path."""
-    from codegen.hostbuild import cache_root
 
     text = render_header(api)
     key = hashlib.sha256(text.encode()).hexdigest()[:16]
@@ -96,7 +98,6 @@ def cdef(api: SimApi) -> str:
 
 def sim_sources(api: SimApi):
     """The :class:`~codegen.hostbuild.SimSources` of a host build (renders the header)."""
-    from codegen.hostbuild import SimSources
 
     header = header_path(api)
     headers = (*SHARED_HEADERS, api.plant_header, header)
@@ -106,3 +107,13 @@ def sim_sources(api: SimApi):
 def include_dirs(api: SimApi) -> list[Path]:
     """Include directories of a build of the simulator (shared, topology, generated header)."""
     return sorted({p.parent for p in (*api.sources, *SHARED_HEADERS, header_path(api))})
+
+
+def simulator_of(module: str) -> Callable[[], SimSources]:
+    """The closed-loop simulator's C of the topology module ``module`` (its ``SIM`` API), imported
+    late: only builds with the simulator need it."""
+
+    def sources() -> SimSources:
+        return sim_sources(importlib.import_module(module).SIM)
+
+    return sources

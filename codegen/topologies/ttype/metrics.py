@@ -207,10 +207,7 @@ def leg_level_changes(seg_states: Any, seg_s: Any, initial_state: int = _OOO) ->
 # all three-level metrics of one run
 # ---------------------------------------------------------------------------
 def three_level_metrics(
-    trace: Trace,
-    model: Model,
-    stats_window: tuple[float, float] | None = None,
-    window_s: float = 0.2,
+    trace: Trace, model: Model, stats_window: tuple[float, float] | None = None, window_s: float = 0.2,
     f_max_hz: float = 10e3,
     uab_grid_s: float = UAB_GRID_S,
     uab_f_max_hz: float = UAB_F_MAX_HZ,

@@ -236,24 +236,14 @@ def _step(t: ThreeLevelTables, x: np.ndarray) -> np.ndarray:
     for i, val in enumerate((half_tn, k.TS6_S, k.TS6_S, tp, k.TS6_S, k.TS6_S, half_tn)):
         seg[:, i] = o.where(bvirt, val, k.TS_S if i == 0 else z)
 
-    out["te_est_nm"] = te
-    out["psi_est_wb"] = mag
-    out["psi_ref_wb"] = psir
-    out["vo_v"] = vo
-    out["vo_pred_v"] = vo1
-    out["u_ref_alpha_v"] = ua
-    out["u_ref_beta_v"] = ub
-    out["t_n_s"] = best_tn
-    out["cost_best"] = best
-    out["costs"] = costs
-    out["seg_s"] = seg
-    out["states"] = states
-    out["vector"] = best_v.astype(np.uint16)
-    out["n_eval"] = row_n.astype(np.uint16)
-    out["n_groups"] = row_n.astype(np.uint16)
-    out["n_members"] = n_members.astype(np.uint16)
-    out["sector"] = (sec + 1).astype(np.uint16)
-    out["cand"] = cand
+    for name, value in {
+        "te_est_nm": te, "psi_est_wb": mag, "psi_ref_wb": psir, "vo_v": vo, "vo_pred_v": vo1, "u_ref_alpha_v": ua,
+        "u_ref_beta_v": ub, "t_n_s": best_tn, "cost_best": best, "costs": costs, "seg_s": seg,
+        "states": states, "vector": best_v.astype(np.uint16), "n_eval": row_n.astype(np.uint16),
+        "n_groups": row_n.astype(np.uint16), "n_members": n_members.astype(np.uint16),
+        "sector": (sec + 1).astype(np.uint16), "cand": cand
+    }.items():
+        out[name] = value
     bad = ~ok
     if bad.any():
         safe = OUTPUT.bind(f.nf).zeros(1)

@@ -25,23 +25,20 @@ def table_bytes(t: ThreeLevelTables) -> dict[str, int]:
 def report_text(model: Model, t: ThreeLevelTables, target: str) -> str:
     """Markdown report of the generated controller."""
     c = model.controller
-    lines = rp.header(model, target, "T-type three-level MPDTC",
-                      f"strategy `{c.strategy}`, lambda_psi {c.lambda_psi_nm_per_wb:g} N*m/Wb, "
-                      f"lambda_vo {c.lambda_vo_nm_per_v:g} N*m/V, one-step delay compensation")
-    lines += rp.constants_section(t.consts)
-    lines += ["", "## Candidate groups", ""]
-    lines += [f"- group {i}: {label}" for i, label in enumerate(t.group_labels)]
-    lines += ["", f"## Candidate rows ({len(t.row_groups)})", ""]
-    lines += [f"- row {i}: {label}: " + " ".join(t.group_labels[g] for g in r)
-              for i, (r, label) in enumerate(zip(t.row_groups, t.row_labels))]
-    lines += rp.memory_section(table_bytes(t))
-    lines += rp.guard_section(FAULT_BITS, "OOO for the whole period")
-    lines += rp.bullets("Assumptions", [
-        "Ld = Lq = Ls (surface PMSM); forward-Euler dq prediction k -> k+1 under the applied vector "
-        "(delay compensation), candidates evaluated at k+2.",
-        "flux reference psi* by MTPA from T*; deadbeat reference voltage u* picks the 63-MPDTC row.",
-        "a group's members are resolved by the smallest predicted |V_o(k+2)|; a virtual member's T_N "
-        "is the neutral-point deadbeat, clamped to [T_N_min, Ts/3].",
-        "sin/cos: generated polynomial, |error| < 2e-7 for |theta_e| <= 256 rad.",
-    ])
-    return "\n".join(lines) + "\n"
+    tables = ["", "## Candidate groups", ""]
+    tables += [f"- group {i}: {label}" for i, label in enumerate(t.group_labels)]
+    tables += ["", f"## Candidate rows ({len(t.row_groups)})", ""]
+    tables += [f"- row {i}: {label}: " + " ".join(t.group_labels[g] for g in r)
+               for i, (r, label) in enumerate(zip(t.row_groups, t.row_labels))]
+    return rp.document(
+        model, target, "T-type three-level MPDTC",
+        f"strategy `{c.strategy}`, lambda_psi {c.lambda_psi_nm_per_wb:g} N*m/Wb, "
+        f"lambda_vo {c.lambda_vo_nm_per_v:g} N*m/V, one-step delay compensation",
+        t.consts, tables, table_bytes(t), FAULT_BITS, "OOO for the whole period", [
+            "Ld = Lq = Ls (surface PMSM); forward-Euler dq prediction k -> k+1 under the applied vector "
+            "(delay compensation), candidates evaluated at k+2.",
+            "flux reference psi* by MTPA from T*; deadbeat reference voltage u* picks the 63-MPDTC row.",
+            "a group's members are resolved by the smallest predicted |V_o(k+2)|; a virtual member's T_N "
+            "is the neutral-point deadbeat, clamped to [T_N_min, Ts/3].",
+            "sin/cos: generated polynomial, |error| < 2e-7 for |theta_e| <= 256 rad.",
+        ])

@@ -128,16 +128,8 @@ def params_from_model(ffi: Any, model: Model, substep_max_s: float | None = None
     return p
 
 
-def run_closed_loop(
-    ffi: Any,
-    lib: Any,
-    model: Model,
-    progress: Callable[[float], None] | None = None,
-    *,
-    chunk: int = DEFAULT_CHUNK,
-    substep_max_s: float | None = None,
-    initial_speed_rpm: float = 0.0,
-) -> Any:
+def run_closed_loop(ffi: Any, lib: Any, model: Model, progress: Callable[[float], None] | None = None, *,
+                    chunk: int = DEFAULT_CHUNK, substep_max_s: float | None = None, initial_speed_rpm: float = 0.0) -> Any:
     """Run the model's scenario through the compiled T-type loop; return the :class:`Trace`.
 
     ``(ffi, lib)``: a cffi library holding ``ttype_sim_init``/``ttype_sim_run``

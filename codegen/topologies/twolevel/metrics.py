@@ -11,10 +11,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
 
 def two_level_metrics(
-    trace: Trace,
-    model: Model,
-    stats_window: tuple[float, float] | None = None,
-    window_s: float = 0.2,
+    trace: Trace, model: Model, stats_window: tuple[float, float] | None = None, window_s: float = 0.2,
     f_max_hz: float = 10e3,
 ) -> dict[str, Any]:
     """The seed-001 metric set of one closed-loop run (JSON-ready values).

@@ -150,20 +150,12 @@ def _step(t: TwoLevelTables, x: np.ndarray) -> np.ndarray:
     vec_to_sw = np.array(t.vec_to_sw, np.uint16)
     sw = np.where(best_v == 0, zero_sw[prev_sw], vec_to_sw[best_v]).astype(np.uint16)
 
-    out["te_est_nm"] = te
-    out["psi_est_wb"] = mag
-    out["psi_alpha_wb"] = psi_a
-    out["psi_beta_wb"] = psi_b
-    out["sin_theta"] = s
-    out["cos_theta"] = c
-    out["cost_best"] = best
-    out["costs"] = costs
-    out["sw"] = sw
-    out["vector"] = best_v.astype(np.uint16)
-    out["n_eval"] = row_n.astype(np.uint16)
-    out["sector"] = sector
-    out["condition"] = cond
-    out["cand"] = cand
+    for name, value in {
+        "te_est_nm": te, "psi_est_wb": mag, "psi_alpha_wb": psi_a, "psi_beta_wb": psi_b, "sin_theta": s,
+        "cos_theta": c, "cost_best": best, "costs": costs, "sw": sw, "vector": best_v.astype(np.uint16),
+        "n_eval": row_n.astype(np.uint16), "sector": sector, "condition": cond, "cand": cand
+    }.items():
+        out[name] = value
     # safe decision on a tripped guard: everything zero but the fault bits
     bad = ~ok
     if bad.any():

@@ -25,18 +25,15 @@ def table_bytes(t: TwoLevelTables) -> dict[str, int]:
 def report_text(model: Model, t: TwoLevelTables, target: str) -> str:
     """Markdown report of the generated controller."""
     c = model.controller
-    lines = rp.header(model, target, "two-level MPTC",
-                      f"strategy `{c.strategy}`, predictor `{c.predictor}`, delay compensation "
-                      f"{c.delay_compensation}, tables `{c.tables}`")
-    lines += rp.constants_section(t.consts)
-    lines += ["", "## Candidate rows", ""]
-    lines += [f"- row {i}: " + " ".join(f"V{v}" for v in r) for i, r in enumerate(t.rows)]
-    lines += rp.memory_section(table_bytes(t))
-    lines += rp.guard_section(FAULT_BITS, "zero vector 000")
-    lines += rp.bullets("Assumptions", [
-        "flux-geometry: Rs neglected and rotor frozen over dt (seed eq. (1)-(3)); dq-euler: forward Euler,\n"
-        "  candidate voltages rotated with theta_e(k).",
-        "delay compensation (when on): k+1 predicted under the vector applied now, candidates for k+2.",
-        "sin/cos: generated polynomial, |error| < 2e-7 for |theta_e| <= 256 rad.",
-    ])
-    return "\n".join(lines) + "\n"
+    rows = ["", "## Candidate rows", ""] + [f"- row {i}: " + " ".join(f"V{v}" for v in r)
+                                           for i, r in enumerate(t.rows)]
+    return rp.document(
+        model, target, "two-level MPTC",
+        f"strategy `{c.strategy}`, predictor `{c.predictor}`, delay compensation {c.delay_compensation}, "
+        f"tables `{c.tables}`",
+        t.consts, rows, table_bytes(t), FAULT_BITS, "zero vector 000", [
+            "flux-geometry: Rs neglected and rotor frozen over dt (eq. (1)-(3) of the MPTC paper); dq-euler: "
+            "forward Euler,\n  candidate voltages rotated with theta_e(k).",
+            "delay compensation (when on): k+1 predicted under the vector applied now, candidates for k+2.",
+            "sin/cos: generated polynomial, |error| < 2e-7 for |theta_e| <= 256 rad.",
+        ])

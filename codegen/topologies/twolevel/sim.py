@@ -90,15 +90,8 @@ def params_from_model(ffi: Any, model: Model, substeps: int | None = None) -> An
     return p
 
 
-def run_closed_loop(
-    ffi: Any,
-    lib: Any,
-    model: Model,
-    progress: Callable[[float], None] | None = None,
-    *,
-    chunk: int = DEFAULT_CHUNK,
-    substeps: int | None = None,
-) -> Any:
+def run_closed_loop(ffi: Any, lib: Any, model: Model, progress: Callable[[float], None] | None = None, *,
+                    chunk: int = DEFAULT_CHUNK, substeps: int | None = None) -> Any:
     """Run the model's scenario through the compiled loop; return the :class:`Trace`.
 
     ``(ffi, lib)`` is a cffi library holding ``twolevel_sim_init`` and
