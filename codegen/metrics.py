@@ -1,6 +1,6 @@
 """Metrics of closed-loop runs shared by every topology, with the names of seed 001.
 
-Definitions (shared/spec/plant-and-metrics.md "Metrics"; seed 001 = Li Yaohua
+Definitions (docs/simulation.md "Metrics"; seed 001 = Li Yaohua
 et al., Control Theory & Applications 40(10), 2023, eq. (7)-(10)):
 
 * ``T_rip_RMSE = sqrt(sum_i (Te_i - T*_i)^2 / n)``            seed eq. (7)

@@ -1,1 +1,1 @@
-"""Serial hardware-in-the-loop harness (shared/spec/hil.md): planned in a later issue; nothing here yet."""
+"""Serial hardware-in-the-loop harness (the HIL protocol): planned in a later issue; nothing here yet."""

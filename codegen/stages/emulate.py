@@ -2,7 +2,7 @@
 
 QEMU (``mps2-an500``, Cortex-M7) runs the ELF with semihosting (the firmware
 exits through SYS_EXIT_EXTENDED) and ``-icount shift=N``, under which SysTick
-counts exactly ``instructions * 2**N / 40`` ticks (shared/spec/targets.md;
+counts exactly ``instructions * 2**N / 40`` ticks (docs/targets.md;
 every image re-checks this with its CAL line: a 1024-NOP sled must take
 1024 instructions).  The UART goes to a file; QEMU runs in its own process
 group, under a timeout, and is always killed by its id.

@@ -3,7 +3,7 @@
  * shared by every port.  The generated controller is reached only through
  * the generated mpc_binding.h (mpc_input_t, mpc_output_t, MPC_STEP).
  *
- * Timing (shared/spec/hil.md "Timing"): the port's up-counting counter
+ * Timing (the HIL protocol "Timing"): the port's up-counting counter
  * port_cycles() is read immediately before and after the call; compiler
  * barriers keep the call from being moved across the reads, and the step is
  * reached through a non-inlined wrapper.  mpc_timed_empty() measures the

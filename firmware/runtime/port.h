@@ -8,7 +8,7 @@
  *   PORT_CYCLES_MASK    port_cycles() counts up modulo PORT_CYCLES_MASK + 1
  *
  * C99; only fixed-width integer types cross this interface (C28x: char and
- * int are 16 bits, see shared/spec/targets.md).
+ * int are 16 bits, see docs/targets.md).
  */
 #ifndef MPC_PORT_H
 #define MPC_PORT_H

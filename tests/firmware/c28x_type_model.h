@@ -1,7 +1,7 @@
 /*
  * c28x_type_model.h -- forced include (-include) for compiling the
  * tms320f28377 project's C on the host under the C28x type rules of
- * shared/spec/targets.md, together with -DMPC_C28X_TYPE_MODEL and the strict
+ * docs/targets.md, together with -DMPC_C28X_TYPE_MODEL and the strict
  * -Werror flags:
  *   - the fixed-width types the sources may use have their C28x sizes in
  *     bits (float 32, uint16_t 16, int32_t/uint32_t 32, uint64_t 64);

@@ -2,8 +2,8 @@
  * pmsm_dq.h -- PMSM dq model shared by the two-level (twolevel_plant.c) and
  * the T-type (ttype_plant.c) host plants, float64 (hand-written runtime).
  *
- * Specification: shared/spec/plant-and-metrics.md "Plant" and
- * shared/spec/mptc-two-level.md "Conventions" (amplitude-invariant
+ * Specification: docs/simulation.md "Plant" and
+ * docs/algorithms.md (two-level MPTC) "Conventions" (amplitude-invariant
  * transforms).  Motor model, d axis on the magnet:
  *   Ld*di_d/dt = u_d - Rs*i_d + omega_e*Lq*i_q
  *   Lq*di_q/dt = u_q - Rs*i_q - omega_e*Ld*i_d - omega_e*psi_f

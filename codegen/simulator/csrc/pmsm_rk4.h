@@ -2,7 +2,7 @@
  * pmsm_rk4.h -- classic 4th-order Runge-Kutta over one constant-voltage
  * interval, shared by every topology's plant (hand-written runtime, float64).
  *
- * Specification: shared/spec/plant-and-metrics.md "Integration" (RK4 with
+ * Specification: docs/simulation.md "Integration" (RK4 with
  * sub-steps of at most 1 us).  The state is a vector x[0..nx-1] whose first
  * four entries are the motor's (i_d, i_q, omega_m, theta_e, see pmsm_state_t)
  * and whose further entries are the topology's (e.g. the neutral-point

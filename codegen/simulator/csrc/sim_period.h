@@ -2,8 +2,8 @@
  * sim_period.h -- the steps of one control period that every topology's
  * closed-loop simulator shares (hand-written runtime, float64).
  *
- * Specification: shared/spec/plant-and-metrics.md ("Plant", "Sampling",
- * "Timing") and shared/spec/mptc-two-level.md ("Parameters and scenarios":
+ * Specification: docs/simulation.md ("Plant", "Sampling",
+ * "Timing") and docs/algorithms.md (two-level MPTC) ("Parameters and scenarios":
  * speed PI).  Structs: the generated sim_api.h (from the field lists of
  * codegen/simulator/records.py), included here once per translation unit.
  *

@@ -2,7 +2,7 @@
  * speed_pi.h -- speed PI of the closed-loop host simulators (sim_period.c),
  * float64 (hand-written runtime).
  *
- * Specification: shared/spec/mptc-two-level.md "Parameters and scenarios"
+ * Specification: docs/algorithms.md (two-level MPTC) "Parameters and scenarios"
  * (speed PI on the mechanical speed error in rad/s, clamped output with
  * anti-windup); the three-level simulator uses the same PI.
  *

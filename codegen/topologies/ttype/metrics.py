@@ -1,6 +1,6 @@
 """Metrics of closed-loop three-level (T-type) runs.
 
-Definitions (shared/spec/plant-and-metrics.md "Metrics", mpdtc-three-level.md):
+Definitions (docs/simulation.md "Metrics", mpdtc-three-level.md):
 
 * ``T_rip_RMSE = sqrt(mean((Te - T*)^2))`` (plant Te at the sample instants,
   T* the reference given to the controller).

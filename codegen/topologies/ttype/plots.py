@@ -1,6 +1,6 @@
 """PNG plots of a closed-loop three-level run (matplotlib, Agg canvas, no GUI).
 
-Plot list: shared/spec/plant-and-metrics.md, last paragraph (torque and
+Plot list: docs/simulation.md, last paragraph (torque and
 reference, flux magnitude, phase currents, and for three-level V_o and u_ab).
 Figures use the object-oriented API (codegen/plotting.py).
 """

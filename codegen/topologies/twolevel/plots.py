@@ -2,7 +2,7 @@
 
 Figures are built with the object-oriented API (``matplotlib.figure.Figure``
 rendered by the Agg canvas), so no pyplot state and no display are involved.
-Plot list: shared/spec/plant-and-metrics.md, last paragraph (speed, torque and
+Plot list: docs/simulation.md, last paragraph (speed, torque and
 reference, flux magnitude, phase currents, spectrum of i_a).
 """
 from __future__ import annotations

@@ -13,8 +13,8 @@ The simulator's parameter, state and trace structs are the field lists
 below (after the shared ones of :mod:`codegen.simulator.records`): the
 generated ``sim_api.h``, the cffi cdef and :class:`Trace` derive from them.
 
-Specification: shared/spec/plant-and-metrics.md ("Plant", "Sampling",
-"Timing", "Fast") and shared/spec/mptc-two-level.md ("Parameters and
+Specification: docs/simulation.md ("Plant", "Sampling",
+"Timing", "Fast") and docs/algorithms.md (two-level MPTC) ("Parameters and
 scenarios").  Timing details: ``csrc/twolevel_sim.c``.
 """
 from __future__ import annotations

@@ -1,7 +1,7 @@
 /*
  * port_config.h -- QEMU mps2-an500 (emulated Cortex-M7), see port.h.
  * SysTick runs from the 25 MHz processor clock; under -icount shift=N it
- * counts exactly instructions * 2^N / 40 (shared/spec/targets.md, checked by
+ * counts exactly instructions * 2^N / 40 (docs/targets.md, checked by
  * the CAL line of port_report): the unit is ticks, not M7 cycles.
  */
 #ifndef PORT_CONFIG_H

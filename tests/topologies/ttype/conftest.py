@@ -1,6 +1,6 @@
 """Fixtures of the three-level simulator tests: stub-controller build and the seed-000 model.
 
-The model is built directly from the parameters of shared/spec/mpdtc-three-level.md
+The model is built directly from the parameters of docs/algorithms.md (T-type MPDTC)
 ("Parameters and scenarios", Table 4) -- these tests exercise the simulator,
 not the config loader.  The controller is the stub of
 tests/fixtures/stub_ttype (a nearest-voltage rule), not the product's MPDTC.

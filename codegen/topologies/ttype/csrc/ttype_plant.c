@@ -3,8 +3,8 @@
  * ttype_plant.h for the model, the neutral-point sign convention and the
  * integration method).
  *
- * Specification: shared/spec/plant-and-metrics.md "Plant" and
- * shared/spec/mpdtc-three-level.md "Inverter, vectors, neutral point".
+ * Specification: docs/simulation.md "Plant" and
+ * docs/algorithms.md (T-type MPDTC) "Inverter, vectors, neutral point".
  * C99; compiles warning-free with
  *   gcc -std=c99 -O2 -Wall -Wextra -Wconversion -Wdouble-promotion -Werror
  *       -ffp-contract=off

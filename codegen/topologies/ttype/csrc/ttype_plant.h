@@ -2,8 +2,8 @@
  * ttype_plant.h -- T-type three-level inverter + PMSM plant, float64
  * (hand-written runtime).
  *
- * Specification: shared/spec/plant-and-metrics.md "Plant" and
- * shared/spec/mpdtc-three-level.md "Inverter, vectors, neutral point".  The
+ * Specification: docs/simulation.md "Plant" and
+ * docs/algorithms.md (T-type MPDTC) "Inverter, vectors, neutral point".  The
  * plant is simulated in double precision on purpose: it is the physical
  * system, separate from the float32 controller.
  *

@@ -4,8 +4,8 @@
  * generated float32 controller step (through mpc_binding.h), with the
  * shared period steps of sim_period.h.
  *
- * Specification: shared/spec/plant-and-metrics.md ("Plant", "Sampling",
- * "Timing") and shared/spec/mpdtc-three-level.md (inverter, neutral point,
+ * Specification: docs/simulation.md ("Plant", "Sampling",
+ * "Timing") and docs/algorithms.md (T-type MPDTC) (inverter, neutral point,
  * "one-step delay compensation", scenarios).  The API and its structs: the
  * generated sim_api.h (ttype_sim_params_t, _state_t, _trace_t from
  * codegen/topologies/ttype/sim.py).

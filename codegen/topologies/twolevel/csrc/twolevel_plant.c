@@ -2,8 +2,8 @@
  * twolevel_plant.c -- two-level inverter + PMSM plant, float64 (see
  * twolevel_plant.h).
  *
- * Specification: shared/spec/plant-and-metrics.md "Plant" (motor, inverter,
- * integration) and shared/spec/mptc-two-level.md "Conventions" (space vector,
+ * Specification: docs/simulation.md "Plant" (motor, inverter,
+ * integration) and docs/algorithms.md (two-level MPTC) "Conventions" (space vector,
  * Clarke/Park, torque).  C99; compiles warning-free with
  *   gcc -std=c99 -O2 -Wall -Wextra -Wconversion -Wdouble-promotion -Werror
  *       -ffp-contract=off

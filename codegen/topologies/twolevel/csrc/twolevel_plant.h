@@ -2,8 +2,8 @@
  * twolevel_plant.h -- two-level inverter + PMSM plant, float64 (hand-written
  * runtime).
  *
- * Specification: shared/spec/plant-and-metrics.md "Plant" and
- * shared/spec/mptc-two-level.md "Conventions".  The plant is simulated in
+ * Specification: docs/simulation.md "Plant" and
+ * docs/algorithms.md (two-level MPTC) "Conventions".  The plant is simulated in
  * double precision on purpose: it is the physical system, separate from the
  * float32 controller, which only sees sampled currents, angle, speed and Udc.
  *

@@ -3,9 +3,9 @@
  * (twolevel_plant.c) + the generated float32 controller step (through
  * mpc_binding.h), with the shared period steps of sim_period.h.
  *
- * Specification: shared/spec/plant-and-metrics.md "Plant" (sampling at the
+ * Specification: docs/simulation.md "Plant" (sampling at the
  * start of each period, timing of delay_compensation, speed loop) and
- * shared/spec/mptc-two-level.md "Parameters and scenarios".  The API and its
+ * docs/algorithms.md (two-level MPTC) "Parameters and scenarios".  The API and its
  * structs: the generated sim_api.h (twolevel_sim_params_t, _state_t,
  * _trace_t from codegen/topologies/twolevel/sim.py).
  *
