@@ -111,11 +111,13 @@ class CMember:
 
 @dataclass(frozen=True)
 class Value:
-    """One flattened 32-bit value of a record: printed name, runtime kind, C read expression."""
+    """One flattened 32-bit value of a record: its member (``costs[3]``), the firmware runtime's
+    value kind and the runtime function that reads it as 32 bits (templates print
+    ``values[i] = reader(rec->member);``)."""
 
     name: str
-    kind: str  # "MPC_VALUE_F32" | "MPC_VALUE_U16"
-    read: str  # C expression with REC for the record pointer
+    kind: str  # MPC_VALUE_F32 | MPC_VALUE_U16 (firmware/runtime/selftest.h)
+    reader: str  # mpc_f32_bits | mpc_u16_value (firmware/runtime/mpc_runtime.h)
 
 
 class RecordLayout:
@@ -165,9 +167,9 @@ class RecordLayout:
         for f in self.fields:
             for s in ([f"[{j}]" for j in range(f.length)] if f.length > 1 else [""]):
                 if f.kind == REAL:
-                    out.append(Value(f.name + s, "MPC_VALUE_F32", f"mpc_f32_bits(REC->{f.name}{s})"))
+                    out.append(Value(f.name + s, self.nf.value_kind, self.nf.value_reader))
                 else:
-                    out.append(Value(f.name + s, "MPC_VALUE_U16", f"(uint32_t)REC->{f.name}{s}"))
+                    out.append(Value(f.name + s, "MPC_VALUE_U16", "mpc_u16_value"))
         return tuple(out)
 
     @cached_property

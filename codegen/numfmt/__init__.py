@@ -75,6 +75,16 @@ class NumberFormat(Protocol):
         ...
 
     @property
+    def value_kind(self) -> str:
+        """The firmware runtime's kind of a flattened real value (``MPC_VALUE_*``, selftest.h)."""
+        ...
+
+    @property
+    def value_reader(self) -> str:
+        """The firmware runtime's function reading a real value as 32 bits (mpc_runtime.h)."""
+        ...
+
+    @property
     def ops(self) -> Ops:
         """The reference's operation helpers in this format."""
         ...

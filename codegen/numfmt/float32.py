@@ -144,6 +144,8 @@ class Float32:
     bits_dtype: np.dtype = np.dtype(np.uint32)
     c_type: str = "float"
     macros: str = "numfmt/float32.j2"
+    value_kind: str = "MPC_VALUE_F32"
+    value_reader: str = "mpc_f32_bits"
     ops: Float32Ops = field(default_factory=Float32Ops)
 
     def const(self, x: float) -> np.float32:

@@ -82,6 +82,11 @@ uint32_t mpc_f32_bits(float value)
     return bits;
 }
 
+uint32_t mpc_u16_value(uint16_t value)
+{
+    return (uint32_t)value;
+}
+
 uint32_t mpc_crc32(uint32_t crc, uint32_t value, uint16_t n_octets)
 {
     /* nibble table of the reflected polynomial 0xEDB88320 */

@@ -36,6 +36,9 @@ uint32_t mpc_overhead(uint16_t n);
 /* Bits of a float32 (no byte pointers: the object is copied whole). */
 uint32_t mpc_f32_bits(float value);
 
+/* A uint16 field as a 32-bit value. */
+uint32_t mpc_u16_value(uint16_t value);
+
 /* CRC-32 (IEEE 802.3, reflected, init/xorout 0xFFFFFFFF as zlib.crc32):
  * feed `n_octets` (1..4) octets of `value`, least significant first (the
  * canonical little-endian serialisation, independent of CHAR_BIT).
