@@ -28,7 +28,10 @@ from typing import Any, NoReturn, get_args
 
 from codegen.errors import FILE_FIELD, MISSING, ConfigError, Marker
 from codegen.model import (
+    FAULT_ACTIONS,
     NUMBER_FORMATS,
+    PLACEMENTS,
+    SCENARIO_SETS,
     PREDICTORS,
     STRATEGIES_BY_TOPOLOGY,
     TABLE_SOURCES,
@@ -235,6 +238,8 @@ SCHEMA: dict[str, Spec] = {
         _cc(0, Ref("controller.dt_s", 1 / 3, "Ts/3")),
         hint_high="T_N clamp minimum above Ts/3",
     ),
+    "controller.fault_action": _choice(FAULT_ACTIONS),
+    "controller.asc_min_speed_rpm": _real(_cc(0, Ref(_RATED_RPM, 10.0, "10*rated"))),
     "controller.derivation.coverage": _real(_oc(0, 1)),
     "controller.derivation.max_active": Spec(INT, _cc(1, 6)),
     "speed_loop.kp": _real(_cc(0, 1e6)),
@@ -242,11 +247,14 @@ SCHEMA: dict[str, Spec] = {
     "speed_loop.limit_nm": _real(_oc(0, 1e6)),
     "scenario.duration_s": _real(_oc(0, 100)),
     "scenario.speed_mode": _choice(get_args(SpeedMode)),
+    "scenario.set": _choice(SCENARIO_SETS),
+    "scenario.window_s": _real(_oc(0, Ref("scenario.duration_s"))),
     "scenario.speed_ref_rpm": Spec(
         STEPS, _cc(Ref(_RATED_RPM, -10.0, "-10*rated"), Ref(_RATED_RPM, 10.0, "10*rated"))
     ),
     "scenario.load_nm": Spec(STEPS),
     "target.name": _choice(TARGETS),
+    "target.placement": _choice(PLACEMENTS),
 }
 
 # Which dataclass holds each section's fields (for defaults and building the

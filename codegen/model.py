@@ -20,6 +20,9 @@ Predictor = Literal["flux-geometry", "dq-euler"]
 TableSource = Literal["derived", "published"]
 Target = Literal["host", "stm32h743", "tms320f28377"]
 SpeedMode = Literal["mechanical", "imposed"]
+FaultAction = Literal["gates-off", "active-short-circuit"]
+ScenarioSet = Literal["config", "mpdtc-table5"]
+Placement = Literal["tcm", "default"]
 
 #: The strategies of each topology, in report order (the first is the baseline).
 STRATEGIES_BY_TOPOLOGY: dict[str, tuple[str, ...]] = {
@@ -29,6 +32,9 @@ STRATEGIES_BY_TOPOLOGY: dict[str, tuple[str, ...]] = {
 PREDICTORS: tuple[str, ...] = ("flux-geometry", "dq-euler")
 TABLE_SOURCES: tuple[str, ...] = ("derived", "published")
 TARGETS: tuple[str, ...] = ("host", "stm32h743", "tms320f28377")
+FAULT_ACTIONS: tuple[str, ...] = ("gates-off", "active-short-circuit")
+SCENARIO_SETS: tuple[str, ...] = ("config", "mpdtc-table5")
+PLACEMENTS: tuple[str, ...] = ("tcm", "default")
 NUMBER_FORMATS: tuple[str, ...] = ("float32",)
 
 
@@ -86,6 +92,10 @@ class Controller:
     lambda_psi_nm_per_wb: float = 28.0
     lambda_vo_nm_per_v: float = 0.01
     t_n_min_s: float | None = None  # None: Ts/6 as in the seed
+    #: what a tripped input guard asks the caller to do with the power stage
+    fault_action: FaultAction = "gates-off"
+    #: active short circuit only at or above this mechanical speed (below it: gates off), r/min
+    asc_min_speed_rpm: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -105,6 +115,10 @@ class Scenario:
     speed_ref_rpm: tuple[tuple[float, float], ...]
     load_nm: tuple[tuple[float, float], ...]
     speed_mode: SpeedMode = "mechanical"
+    #: "config": run this section's profile; "mpdtc-table5": the MPDTC paper's steady speeds and load step
+    set: ScenarioSet = "config"
+    #: length of the steady window each metric is taken over (end of each constant-reference segment), s
+    window_s: float = 0.2
 
 
 @dataclass(frozen=True)
@@ -120,6 +134,8 @@ class Model:
     speed_loop: SpeedLoop
     scenario: Scenario
     target: Target = "host"
+    #: memory placement of the step and its tables (stm32h743: "tcm" = ITCM/DTCM sections)
+    placement: Placement = "tcm"
     #: one-line warnings of the operating-point checks (not part of the config hash)
     warnings: tuple[str, ...] = field(default=(), compare=False)
 

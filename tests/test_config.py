@@ -149,7 +149,7 @@ def test_ints_accepted_for_floats_and_normalised(tmp_path: Path) -> None:
 
 def test_schema_covers_every_model_field() -> None:
     """No Model field is silently left at its default by the loader."""
-    leaves = {"meta.name", "meta.prefix", "target.name"}
+    leaves = {"meta.name", "meta.prefix", "target.name", "target.placement"}
     sections = {"motor": model_module.Motor, "inverter": model_module.Inverter,
                 "controller": model_module.Controller, "speed_loop": model_module.SpeedLoop,
                 "scenario": model_module.Scenario, "controller.derivation": model_module.Derivation}
