@@ -73,3 +73,14 @@ def test_servo_example_loads() -> None:
 def test_servo_example_generates(tmp_path: Path) -> None:
     assert main(["generate", str(SERVO), "-o", str(tmp_path), "-q"]) == 0
     assert (tmp_path / "servo_mpc.c").is_file()
+
+
+def test_no_file_points_outside_the_repository():
+    """No tracked file refers to the team's private specification folder."""
+    import subprocess
+
+    files = subprocess.run(["git", "-C", str(ROOT), "ls-files"], capture_output=True, text=True,
+                           check=True).stdout.split()
+    needle = "shared" + "/spec"  # spelled in two parts so this file does not match itself
+    hits = [f for f in files if (ROOT / f).is_file() and needle in (ROOT / f).read_text(errors="ignore")]
+    assert hits == []
