@@ -25,7 +25,7 @@ def test_training_derivation(capsys):
     assert main(["tables", str(SPMSM), "-q"]) == 0
     out = capsys.readouterr().out
     assert "Utilisation from the training run" in out
-    m = re.search(r"s2 vs the seed's published table:\n(?:.*\n)*?(\d+) of 12 cells equal", out)
+    m = re.search(r"s2 vs the paper's published table:\n(?:.*\n)*?(\d+) of 12 cells equal", out)
     assert m, out
     # the SPMSM training run re-derives most of the seed's s2 table
     assert int(m.group(1)) >= 8

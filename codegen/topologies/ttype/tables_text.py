@@ -80,7 +80,7 @@ def compare_labels(seed: tuple[str, ...], derived: tuple[str, ...]) -> tuple[boo
     if missing:
         parts.append("not derived: " + ", ".join(missing))
     if extra:
-        parts.append("derived, not in seed: " + ", ".join(extra))
+        parts.append("derived, not in the paper: " + ", ".join(extra))
     if versions:
         parts.append("split version: " + "; ".join(versions))
     return (not parts), "; ".join(parts)
@@ -141,7 +141,7 @@ def fallback_example_check() -> tuple[bool, str]:
     row = cd.derive_candidate_table().row(state, ex.sector)
     ok = row.source_sector == ex.used_sector and set(cd.row_labels(row)) == set(ex.candidates)
     return ok, (f"prev u{ex.prev}, u* in sector {cd.SECTOR_NAMES[ex.sector]}: derived sector "
-                f"{cd.SECTOR_NAMES[row.source_sector]} {{{', '.join(cd.row_labels(row))}}}; seed sector "
+                f"{cd.SECTOR_NAMES[row.source_sector]} {{{', '.join(cd.row_labels(row))}}}; paper sector "
                 f"{cd.SECTOR_NAMES[ex.used_sector]} {{{', '.join(ex.candidates)}}}")
 
 
@@ -165,10 +165,10 @@ def _fmt_row(labels: tuple[str, ...]) -> str:
 
 def tables_report() -> str:
     """Seed notation: Table 2 sequences, sector-I candidate rows vs Table 3."""
-    lines = ["T-type three-level 63-MPDTC: derived tables vs seed 000", "",
+    lines = ["T-type three-level 63-MPDTC: derived tables vs the MPDTC paper", "",
              "Table 2: virtual-vector sequences (sectors I, II)"]
     for c in table2_check():
-        lines.append(f"  {c.name:<8} {c.derived}  {'MATCH' if c.match else 'DIFFERS (seed ' + c.seed + ')'}")
+        lines.append(f"  {c.name:<8} {c.derived}  {'MATCH' if c.match else 'DIFFERS (paper ' + c.seed + ')'}")
     lines += ["", "Spec acceptance rows (sector I)"]
     t = cd.derive_candidate_table()
     for name, ok in required_rows_check().items():
@@ -180,20 +180,20 @@ def tables_report() -> str:
             lines.append(f"  {name}: {'yes' if ok else 'NO'}")
     ok, text = fallback_example_check()
     lines += ["", f"Seed fallback example: {text}  {'MATCH' if ok else 'DIFFERS'}", "",
-              "Table 3: u* in sector I, derived rows vs the seed (extracted text)"]
+              "Table 3: u* in sector I, derived rows vs the paper (extracted text)"]
     for r in table3_check():
         lines.append(f"  {r.prev_label:<11} derived {_fmt_row(r.derived)} [{r.n_groups}]  {r.status}")
         if r.status == "DIFFERS":
-            lines.append(f"  {'':<11} seed    {r.seed_printed}")
+            lines.append(f"  {'':<11} paper   {r.seed_printed}")
         if r.note:
             lines.append(f"  {'':<11} ({r.note})")
     for name in ("NNN", "PPP"):
         row = t.row(v.state_by_name(name), 0)
         extra = " short: no sector offers 3 groups; never applied by 63-MPDTC" if row.short else ""
         lines.append(f"  u0 ({name})    derived {_fmt_row(cd.row_labels(row))} [{row.n_groups}]  "
-                     f"not in seed{extra}")
+                     f"not in the paper{extra}")
     hist = group_count_histogram()
     lines += ["", "Group counts over the 25 states 63-MPDTC applies x 12 sectors: "
               + ", ".join(f"{n} groups: {k} rows" for n, k in hist.items())
-              + f" (seed: {' or '.join(map(str, pub.PUBLISHED_GROUP_COUNTS))})"]
+              + f" (paper: {' or '.join(map(str, pub.PUBLISHED_GROUP_COUNTS))})"]
     return "\n".join(lines) + "\n"

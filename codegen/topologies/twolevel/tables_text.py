@@ -74,10 +74,10 @@ def two_level_tables_text(model: Model, source: str, log: Callable[[str], None])
         thin = np.argwhere(thin_cells(counts[k]))
         if len(thin):
             cells = ", ".join(f"condition {c + 1} sector {s + 1}" for c, s in thin)
-            parts += [f"{k}: {len(thin)} cells have < {MIN_CELL_SAMPLES} active choices and take the seed-derived set: {cells}", ""]
+            parts += [f"{k}: {len(thin)} cells have < {MIN_CELL_SAMPLES} active choices and take the set derived from the paper's own data: {cells}", ""]
     parts += [f"s2 derived (coverage {d.coverage:.2f}, max_active {d.max_active}):", format_switch_table(s2, "s2"), ""]
-    parts += ["s2 vs the seed's published table:", format_comparison(compare_tables(s2, pub.PUBLISHED_S2), "s2"), ""]
+    parts += ["s2 vs the paper's published table:", format_comparison(compare_tables(s2, pub.PUBLISHED_S2), "s2"), ""]
     parts += ["s3 derived:", format_switch_table(s3, "s3"), ""]
-    parts += ["s3 row dT>0,dpsi>0 vs the seed's published row:",
+    parts += ["s3 row dT>0,dpsi>0 vs the paper's published row:",
               format_comparison(compare_tables((s3[0],), (pub.PUBLISHED_S3_ROW,)), "s3")]
     return "\n".join(parts)

@@ -287,7 +287,7 @@ def _difference_note(util: np.ndarray, row: ComparisonRow, kind: TableKind, tabl
     note = (
         f"- sector {row.sector + 1} ({_condition_label(kind, row.condition)}): {table_name} "
         f"theta_{row.sector + 1} active utilisation {shares}; the rule gives "
-        f"{{{_cell_text(row.derived)}}}, the seed publishes {{{_cell_text(row.published)}}}."
+        f"{{{_cell_text(row.derived)}}}, the paper publishes {{{_cell_text(row.published)}}}."
     )
     kept = [v for v in row.published if v]
     omitted = [v for v in range(1, N_VECTORS) if v not in row.published]
@@ -296,7 +296,7 @@ def _difference_note(util: np.ndarray, row: ComparisonRow, kind: TableKind, tabl
             if col[o] > col[k]:
                 note += (
                     f"\n  Seed's own inconsistency: {table_name} gives V{o} {col[o]:.2f} % > "
-                    f"V{k} {col[k]:.2f} % yet the seed keeps V{k}."
+                    f"V{k} {col[k]:.2f} % yet the paper keeps V{k}."
                 )
     total = col.sum()
     if abs(total - 100.0) > 0.1:
@@ -318,7 +318,7 @@ def published_derivation_report(
     section 4; expected 12 of 12 at coverage 0.90).  s3: all 4 rows derived
     from Tables 5-8, row 0 compared with the published s3 row (seed section 5;
     expected 11 of 12, the difference at sector 5, where Table 5 gives V6
-    19.54 % > V4 18.41 % yet the seed keeps V4).
+    19.54 % > V4 18.41 % yet the paper keeps V4).
 
     Returns ``(text, s2_rows, s3_rows)``.
     """
@@ -328,19 +328,19 @@ def published_derivation_report(
     s2_rows = compare_tables(s2, pub.PUBLISHED_S2)
     s3_rows = compare_tables(s3, (pub.PUBLISHED_S3_ROW,))
     out = [
-        f"Switch tables derived from the seed's published utilisation "
+        f"Switch tables derived from the paper's published utilisation "
         f"(coverage {coverage:.2f}, max_active {max_active})",
         "",
         "s2, derived from Tables 3-4:",
         format_switch_table(s2, "s2"),
         "",
-        "s2 vs the published table (seed section 4):",
+        "s2 vs the published table (paper section 4):",
         format_comparison(s2_rows, "s2"),
         "",
         "s3, derived from Tables 5-8:",
         format_switch_table(s3, "s3"),
         "",
-        "s3 row dT>0,dpsi>0 vs the published row (seed section 5):",
+        "s3 row dT>0,dpsi>0 vs the published row (paper section 5):",
         format_comparison(s3_rows, "s3"),
     ]
     names = {"s2": ("Table 3", "Table 4"), "s3": ("Table 5", "Table 6", "Table 7", "Table 8")}

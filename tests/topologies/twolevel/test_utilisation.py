@@ -64,7 +64,7 @@ def test_report_names_the_seed_inconsistency() -> None:
     assert "12 of 12 cells equal" in text
     assert "11 of 12 cells equal" in text
     assert "DIFFERS (published: V0 V4 V5)" in text
-    assert "Table 5 gives V6 19.54 % > V4 18.41 % yet the seed keeps V4" in text
+    assert "Table 5 gives V6 19.54 % > V4 18.41 % yet the paper keeps V4" in text
     assert "sums to 94.20 %" in text
 
 
