@@ -15,6 +15,8 @@ from pathlib import Path
 import jinja2
 
 from codegen import __version__
+from codegen.kernels.consts import Const
+from codegen.kernels.trig import ANGLE_GUARD_RAD
 from codegen.model import Model
 from codegen.numfmt import NumberFormat, number_format
 from codegen.numfmt.float32 import c_float_literal
@@ -30,6 +32,17 @@ class Profile:
     code_attr: str  # attribute placing the step (e.g. in ITCM)
     data_attr: str  # attribute placing the tables (e.g. in DTCM)
     description: str
+    placed: bool = True  # False: target.placement = "default", no section attribute or pragma
+
+
+def placed_profile(target: str, placement: str) -> Profile:
+    """The profile of ``target`` under ``target.placement``: "tcm" keeps its sections (ITCM/DTCM,
+    .TI.ramfunc); "default" drops every section attribute and pragma (the linker's defaults)."""
+    p = PROFILES[target]
+    if placement == "default":
+        return dataclasses.replace(p, code_attr="", data_attr="", placed=False,
+                                   description=p.description.split(":")[0] + ": default sections (target.placement)")
+    return p
 
 
 PROFILES: dict[str, Profile] = {
@@ -83,7 +96,7 @@ def base_context(model: Model, target: str) -> dict:
         "version": __version__,
         "prefix": model.prefix,
         "PREFIX": model.prefix.upper(),
-        "profile": PROFILES[target],
+        "profile": placed_profile(target, model.placement),
         "number_format": nf.name,
         "numfmt": nf.macros,
     }
@@ -103,6 +116,8 @@ def step_context(model: Model, target: str, records: tuple[Record, Record],
     return {
         **base_context(model, target),
         "faults": faults,
+        "dt_s": model.controller.dt_s,
+        "angle_guard_rad": ANGLE_GUARD_RAD,
         "input_fields": records[0].bind(nf).members,
         "output_fields": records[1].bind(nf).members,
         **values,
@@ -124,6 +139,27 @@ def render_step(model: Model, topology_dir: str, ctx: dict) -> dict[str, str]:
 def render_step_cdef(ctx: dict) -> str:
     """cffi declarations (no preprocessor lines) of a step's host build."""
     return render_files({"cdef": "common/cdef.h.j2"}, ctx)["cdef"]
+
+
+def speed_pi_constants(model: Model) -> list[Const]:
+    """Constants of the generated speed PI (``speed_loop``, ``controller.dt_s``), rounded once."""
+    nf = number_format(model.controller.number_format)
+    sl = model.speed_loop
+    return [
+        Const("SPI_KP", nf.const(sl.kp), "N*m*s/rad", "speed PI proportional gain kp"),
+        Const("SPI_KI_DT", nf.const(sl.ki * model.controller.dt_s), "N*m/rad", "ki dt: integral += ki dt e"),
+        Const("SPI_LIMIT_NM", nf.const(sl.limit_nm), "N*m", "torque reference and integral clamp"),
+    ]
+
+
+def render_speed_pi(model: Model, target: str) -> dict[str, str]:
+    """File name -> text of the portable speed PI, ``<prefix>_speed_pi.h`` and ``.c``."""
+    nf = number_format(model.controller.number_format)
+    sl = model.speed_loop
+    ctx = {**base_context(model, target), "consts": speed_pi_constants(model), "real": nf.c_type,
+           "kp": sl.kp, "ki": sl.ki, "limit_nm": sl.limit_nm, "dt_s": model.controller.dt_s}
+    p = model.prefix
+    return render_files({f"{p}_speed_pi.h": "common/speed_pi.h.j2", f"{p}_speed_pi.c": "common/speed_pi.c.j2"}, ctx)
 
 
 def write_files(files: dict[str, str], outdir: Path) -> list[Path]:

@@ -11,7 +11,7 @@ from codegen.model import Model
 from codegen.numfmt import NumberFormat
 from codegen.units import GUARD_UNITS
 
-__all__ = ["Const", "Constants", "guard_limits", "leading_constants", "sector_constants"]
+__all__ = ["Const", "Constants", "guard_limits", "leading_constants", "sector_constants", "fault_action_constants"]
 
 
 @dataclass(frozen=True)
@@ -72,6 +72,18 @@ def sector_constants(nf: NumberFormat) -> list[Const]:
         Const("TAN30", nf.const(math.tan(math.pi / 6)), "", "sector borders at 30 deg multiples"),
         Const("TAN60", nf.const(math.tan(math.pi / 3)), "", "tan(60 deg): sector borders"),
     ]
+
+
+def fault_action_constants(model: Model, nf: NumberFormat) -> list[Const]:
+    """The constant of ``controller.fault_action`` (none for "gates-off"): for "active-short-circuit"
+    the electrical-speed threshold p * asc_min_speed_rpm * 2 pi / 60 of the short circuit,
+    computed in float64 and rounded once."""
+    c = model.controller
+    if c.fault_action != "active-short-circuit":
+        return []
+    w = model.motor.pole_pairs * c.asc_min_speed_rpm * 2.0 * math.pi / 60.0
+    return [Const("ASC_OMEGA_MIN_RAD_S", nf.const(w), "rad/s",
+                  "fault: active short circuit at |omega_e| >= this (p * asc_min_speed_rpm), else gates off")]
 
 
 class HasConsts:

@@ -21,7 +21,7 @@ from codegen.kernels.frames import third_phase
 from codegen.numfmt import Ops
 
 __all__ = ["COMMON_FAULTS", "COMMON_FAULT_DOCS", "PhaseCurrents", "AllAtLeast", "AllAtMost", "AbsAtMost",
-           "IndexAtMost", "RealInRangeWhen", "Check", "fault_bits", "motor_checks", "evaluate"]
+           "IndexAtMost", "RealInRangeWhen", "Check", "fault_bits", "motor_checks", "evaluate", "gates_off"]
 
 #: fault bits every topology's guard has, in bit order
 COMMON_FAULTS: tuple[str, ...] = ("CURRENT", "UDC_LOW", "UDC_HIGH", "ANGLE", "SPEED", "TORQUE_REF", "STATE")
@@ -168,3 +168,16 @@ def evaluate(ops: Ops, checks: tuple[Check, ...], bits: Mapping[str, int], k: Co
     for c in checks:
         fault |= np.where(_ok(ops, c, k, x), 0, bits[c.fault]).astype(np.uint16)
     return fault
+
+
+def gates_off(ops: Ops, fault: np.ndarray, omega_e: np.ndarray, fault_action: str, k: Constants) -> np.ndarray:
+    """The ``gates_off`` output (uint16) per record: 0 without a fault; on a fault 1 for
+    ``fault_action`` "gates-off", and for "active-short-circuit" 0 (the safe decision, the zero
+    vector, is applied) when |omega_e| >= ASC_OMEGA_MIN_RAD_S, else 1.  ``omega_e`` is the raw input
+    (not the zeroed faulted lane): a NaN speed fails the comparison and gives gates off.
+    C: ``kernels.j2`` ``gates_off``."""
+    if fault_action == "gates-off":
+        on_fault = np.ones(len(fault), bool)
+    else:
+        on_fault = ~ops.ge(ops.abs(omega_e), k.ASC_OMEGA_MIN_RAD_S)
+    return np.where((fault != 0) & on_fault, 1, 0).astype(np.uint16)

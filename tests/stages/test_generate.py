@@ -31,6 +31,8 @@ def test_compiles_strict_for_every_target(tmp_path, cfg, strategy):
         compile_strict(src, tmp_path / "x.o")
         if target == "stm32h743":
             compile_m7(src, tmp_path / "m7.o")
+        pi = [f for f in files if f.name.endswith("_speed_pi.c")][0]
+        compile_strict(pi, tmp_path / "pi.o")
 
 
 def test_generate_twice_is_byte_identical(tmp_path):

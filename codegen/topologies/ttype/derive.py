@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from codegen.kernels.consts import Const, HasConsts, leading_constants, sector_constants
+from codegen.kernels.consts import Const, HasConsts, fault_action_constants, leading_constants, sector_constants
 from codegen.kernels.consts import guard_limits as shared_guard_limits
 from codegen.kernels.dq import DqModel
 from codegen.model import Model
@@ -54,6 +54,8 @@ class ThreeLevelTables(HasConsts):
     row_labels: tuple[str, ...]
     group_labels: tuple[str, ...]
     number_format: str = "float32"
+    #: controller.fault_action: what the gates_off output asks on a fault ("gates-off" | "active-short-circuit")
+    fault_action: str = "gates-off"
 
 
     @property
@@ -124,7 +126,7 @@ def _constants(model: Model, nf: NumberFormat) -> list[Const]:
         Const("TWO_C", f(2.0 * inv.c_f), "F", "2C: T_N deadbeat numerator V_o 2C"),
         Const("LAMBDA_PSI", f(c.lambda_psi_nm_per_wb), "N*m/Wb", "eq. (7) lambda1"),
         Const("LAMBDA_VO", f(c.lambda_vo_nm_per_v), "N*m/V", "eq. (7) lambda2"),
-    ] + sector_constants(nf)
+    ] + sector_constants(nf) + fault_action_constants(model, nf)
     return out
 
 
@@ -197,4 +199,5 @@ def derive_three_level(model: Model) -> ThreeLevelTables:
         row_labels=tuple(labels),
         group_labels=tuple(_group_label(g) for g in groups),
         number_format=nf.name,
+        fault_action=model.controller.fault_action,
     )

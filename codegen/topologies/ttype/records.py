@@ -56,6 +56,7 @@ OUTPUT_FIELDS: tuple[Field, ...] = fields("""
     n_members      u16   1           candidate vectors whose V_o(k+2) was predicted
     sector         u16   1           12-sector of u*, 1-based (0: fault)
     fault          u16   1           fault bits (FAULT_* below); nonzero => safe decision
+    gates_off      u16   1           1: disable the PWM outputs this period (fault, controller.fault_action); 0: apply
     cand           u16   N_MAX_EVAL  resolved member (vector id) of group j; 0 beyond n_eval
 """, N_MAX_EVAL=N_MAX_EVAL, N_SEGMENTS=N_SEGMENTS)
 

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from codegen.kernels.consts import Const, HasConsts, leading_constants, sector_constants
+from codegen.kernels.consts import Const, HasConsts, fault_action_constants, leading_constants, sector_constants
 from codegen.kernels.consts import guard_limits as shared_guard_limits
 from codegen.kernels.dq import DqModel
 from codegen.model import Model
@@ -41,6 +41,8 @@ class TwoLevelTables(HasConsts):
     rows: tuple[tuple[int, ...], ...]  # candidate row = condition * n_sectors + sector
     uses_threshold: bool
     number_format: str = "float32"
+    #: controller.fault_action: what the gates_off output asks on a fault ("gates-off" | "active-short-circuit")
+    fault_action: str = "gates-off"
 
 
     @property
@@ -83,7 +85,7 @@ def _constants(model: Model, nf: NumberFormat) -> list[Const]:
             Const("A_D", f(c.dt_s / m.ld_h), "s/H", "i_d+ = i_d + dt/Ld (u_d - Rs i_d + w Lq i_q)"),
             Const("A_Q", f(c.dt_s / m.lq_h), "s/H", "i_q+ = i_q + dt/Lq (u_q - Rs i_q - w Ld i_d - w psi_f)"),
         ]
-    return out
+    return out + fault_action_constants(model, nf)
 
 
 def table_layout(strategy: str) -> tuple[int, int, bool]:
@@ -129,4 +131,5 @@ def derive_two_level(model: Model, switch_table: SwitchTable | None = None) -> T
         rows=rows,
         uses_threshold=thr,
         number_format=nf.name,
+        fault_action=model.controller.fault_action,
     )

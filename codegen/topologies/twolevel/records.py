@@ -35,6 +35,7 @@ OUTPUT_FIELDS: tuple[Field, ...] = fields("""
     vector        u16   1          chosen vector index 0..6 (V0 realised as 000 or 111)
     n_eval        u16   1          costs evaluated in this step (Cal)
     fault         u16   1          fault bits (FAULT_* below); nonzero => safe decision
+    gates_off     u16   1          1: disable the PWM outputs this period (fault, controller.fault_action); 0: apply sw
     sector        u16   1          flux sector used, 1-based (0: none used)
     condition     u16   1          table condition row used, 1-based (0: none)
     cand          u16   N_VECTORS  candidate vector j in evaluation order; 0 beyond n_eval

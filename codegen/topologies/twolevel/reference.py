@@ -20,7 +20,7 @@ import numpy as np
 from codegen.kernels import dq, frames
 from codegen.kernels.batch import begin_step, run_batch
 from codegen.kernels.consts import Constants
-from codegen.kernels.guard import evaluate
+from codegen.kernels.guard import evaluate, gates_off
 from codegen.kernels.sector import sector12
 from codegen.kernels.trig import sincos
 from codegen.numfmt import number_format
@@ -161,4 +161,6 @@ def _step(t: TwoLevelTables, x: np.ndarray) -> np.ndarray:
     if bad.any():
         out[bad] = OUTPUT.bind(f.nf).zeros(1)
         out["fault"] = fault
+    # what the caller does with the power stage (controller.fault_action; 0 without a fault)
+    out["gates_off"] = gates_off(o, fault, x["omega_e_rad_s"], t.fault_action, k)
     return out

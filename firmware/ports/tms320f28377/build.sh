@@ -32,7 +32,7 @@ done
 # reassociation, no TMU: sqrtf and division stay library/IEEE operations);
 # every warning is an error.
 flags="-v28 -ml -mt --float_support=fpu32 --abi=eabi --c99 -O2 --fp_mode=strict --fp_reassoc=off
-       --define=MPC_TARGET_C28X --display_error_number --emit_warnings_as_errors -I$cgt/include"
+       --define=MPC_TARGET_C28X --define=MPCGEN_FP_CONTRACT_OFF=1 --display_error_number --emit_warnings_as_errors -I$cgt/include"
 
 mkdir -p "$out"
 objs=""
