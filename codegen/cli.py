@@ -128,14 +128,19 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     model = _load(args)
     cliargs.output_file("--json", args.json)
     plots = cliargs.output_dir("--plots", args.plots) if args.plots else None
+    traces = cliargs.output_file("--traces", args.traces)
     log = _log(args.quiet)
     topo = topology_of(model)
     if args.sweep_eps is not None:
+        if traces is not None:
+            raise UsageError("--traces goes with a scenario run, not with --sweep-eps")
         eps = cliargs.check_sweep_eps("--sweep-eps", cliargs.sweep_values("--sweep-eps", args.sweep_eps), model)
         data = topo.sweep_eps(model, eps, log=log)
     else:
-        data = topo.simulate(model, _strategies(args, model), plots, log=log)
+        data = topo.simulate(model, _strategies(args, model), plots, log=log, traces=traces)
     print(data.pop("_table"))
+    for warning in data.pop("_warnings", []):
+        print(f"mpcgen: warning: {warning}", file=sys.stderr)
     _write_json(args.json, data)
     return EXIT_OK
 
@@ -205,6 +210,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--strategies", help="comma list (default: all of the topology)")
     s.add_argument("--json", help="write metrics as JSON")
     s.add_argument("--plots", help="directory for PNG plots")
+    s.add_argument("--traces", metavar="FILE",
+                   help="write every run's time series (npz; CSV if FILE ends in .csv), one column per signal")
     s.add_argument("--sweep-eps", metavar="START:STOP:STEP",
                    help="threshold sweep of seed-001 Table 1/2 with strategy s1 (e.g. 0.1:1.5:0.1)")
     s.set_defaults(func=cmd_simulate)

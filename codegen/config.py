@@ -31,8 +31,8 @@ from codegen.model import (
     FAULT_ACTIONS,
     NUMBER_FORMATS,
     PLACEMENTS,
-    SCENARIO_SETS,
     PREDICTORS,
+    SCENARIO_SETS,
     STRATEGIES_BY_TOPOLOGY,
     TABLE_SOURCES,
     TARGETS,
@@ -514,8 +514,18 @@ def _check_tables_file(ck: _Checker) -> None:
                 f"controller.tables = '{v['controller.tables']}')")
 
 
+def _check_scenario_set(ck: _Checker) -> None:
+    """``scenario.set = "mpdtc-table5"`` is the T-type (MPDTC) paper's run set: t-type only."""
+    v = ck.values
+    if v["scenario.set"] == "mpdtc-table5" and v["inverter.topology"] != "t-type":
+        ck.fail("scenario.set", v["scenario.set"],
+                "the MPDTC paper's Table 5 set runs a t-type inverter; inverter.topology = "
+                f"'{v['inverter.topology']}' runs this config's scenario: use scenario.set = 'config'")
+
+
 _CONSISTENCY: tuple[Callable[[_Checker], None], ...] = (
     _check_topology,
+    _check_scenario_set,
     _check_tables_file,
     _check_surface_pmsm,
 )

@@ -48,6 +48,15 @@ __all__ = [
     "run_windows",
     "thd_ia",
     "steady_ripples",
+    "SPEED_BAND_FRACTION",
+    "SPEED_BAND_FLOOR",
+    "TORQUE_REF_SPREAD",
+    "SteadyCheck",
+    "check_steady",
+    "not_computed",
+    "WINDOW_GROUPS",
+    "metric_flags",
+    "fault_counts",
 ]
 
 # Tolerance, in samples / periods, for mapping times onto the sample grid.
@@ -73,6 +82,13 @@ def _change_times(steps: tuple[tuple[float, float], ...], duration_s: float) -> 
     return out
 
 
+def reference_changes(model: Model) -> list[float]:
+    """Start-up (t = 0) and every instant where the speed reference or the load changes, sorted."""
+    sc = model.scenario
+    cuts = _change_times(sc.speed_ref_rpm, sc.duration_s) | _change_times(sc.load_nm, sc.duration_s)
+    return [0.0, *sorted(cuts)]
+
+
 def steady_windows(model: Model, window_s: float = 0.2) -> list[tuple[float, float]]:
     """The last ``window_s`` of each constant-reference segment, as (t0, t1) in s.
 
@@ -85,9 +101,7 @@ def steady_windows(model: Model, window_s: float = 0.2) -> list[tuple[float, flo
     """
     if window_s <= 0:
         raise ValueError("window_s must be > 0")
-    sc = model.scenario
-    cuts = _change_times(sc.speed_ref_rpm, sc.duration_s) | _change_times(sc.load_nm, sc.duration_s)
-    bounds = [0.0, *sorted(cuts), float(sc.duration_s)]
+    bounds = [*reference_changes(model), float(model.scenario.duration_s)]
     return [(max(a, b - window_s), b) for a, b in zip(bounds[:-1], bounds[1:])]
 
 
@@ -108,6 +122,87 @@ def window_mask(n: int, dt_s: float, windows: list[tuple[float, float]] | tuple[
     for t0, t1 in windows:  # type: ignore[misc]
         mask[window_slice(dt_s, t0, t1, n)] = True
     return mask
+
+
+# ---------------------------------------------------------------------------
+# is a window steady?  (docs/simulation.md "Steady windows")
+# ---------------------------------------------------------------------------
+#: speed band: |n - n*| <= SPEED_BAND_FRACTION * max(|n*|, SPEED_BAND_FLOOR * rated speed) over the window
+SPEED_BAND_FRACTION = 0.05
+SPEED_BAND_FLOOR = 0.1
+#: torque-reference spread: max(T*) - min(T*) <= TORQUE_REF_SPREAD * rated torque over the window
+TORQUE_REF_SPREAD = 0.1
+
+
+@dataclass(frozen=True)
+class SteadyCheck:
+    """The steady-state check of one window [t0, t1) (:func:`check_steady`)."""
+
+    t0_s: float
+    t1_s: float
+    reasons: tuple[str, ...]  # empty: steady
+    speed_dev_max_rpm: float
+    speed_band_rpm: float
+    torque_ref_spread_nm: float
+    torque_ref_band_nm: float
+
+    @property
+    def steady(self) -> bool:
+        return not self.reasons
+
+    @property
+    def reason(self) -> str:
+        """The reasons joined into one line ("" when steady)."""
+        return "; ".join(self.reasons)
+
+    def as_json(self) -> dict[str, Any]:
+        """``steady``, the measured criteria and, when not steady, ``not_steady_reason``."""
+        out: dict[str, Any] = {
+            "steady": self.steady,
+            "steady_check": {"speed_dev_max_rpm": self.speed_dev_max_rpm, "speed_band_rpm": self.speed_band_rpm,
+                             "torque_ref_spread_nm": self.torque_ref_spread_nm,
+                             "torque_ref_band_nm": self.torque_ref_band_nm},
+        }
+        if not self.steady:
+            out["not_steady_reason"] = self.reason
+        return out
+
+
+def check_steady(trace: Any, model: Model, t0: float, t1: float) -> SteadyCheck:
+    """Is [t0, t1) a steady window?  Steady when all three hold (docs/simulation.md "Steady windows"):
+
+    1. no reference change in [t0, t1): the window neither starts at t = 0
+       (start-up) nor at or after a step of the speed reference or the load
+       without a settling time before it (a segment not longer than
+       ``scenario.window_s`` gives a window that starts at its step);
+    2. the speed settled: max |n - n*| <= SPEED_BAND_FRACTION * max(|n*|,
+       SPEED_BAND_FLOOR * rated speed) (n* the window's largest |reference|);
+    3. the torque reference settled: max(T*) - min(T*) <= TORQUE_REF_SPREAD *
+       rated torque.
+    """
+    sl = window_slice(trace.dt_s, t0, t1, trace.n)
+    reasons: list[str] = []
+    for c in reference_changes(model):
+        if t0 - GRID_TOL * trace.dt_s <= c < t1:
+            reasons.append("contains the start-up (t = 0)" if c == 0.0
+                           else f"contains the reference step at t = {c:g} s")
+    if sl.stop <= sl.start:
+        return SteadyCheck(t0, t1, (*reasons, "no samples"), math.nan, math.nan, math.nan, math.nan)
+    n_ref = np.asarray(trace.speed_ref_rpm[sl], dtype=np.float64)
+    dev = float(np.max(np.abs(np.asarray(trace.speed_rpm[sl], dtype=np.float64) - n_ref)))
+    band = SPEED_BAND_FRACTION * max(float(np.max(np.abs(n_ref))), SPEED_BAND_FLOOR * model.motor.rated_speed_rpm)
+    if not dev <= band:
+        reasons.append(f"speed off its reference by up to {dev:.4g} r/min (band {band:.4g} r/min)")
+    spread = float(np.ptp(np.asarray(trace.torque_ref_nm[sl], dtype=np.float64)))
+    t_band = TORQUE_REF_SPREAD * model.motor.rated_torque_nm
+    if not spread <= t_band:
+        reasons.append(f"torque reference spread {spread:.4g} N*m (limit {t_band:.4g} N*m)")
+    return SteadyCheck(t0, t1, tuple(reasons), dev, band, spread, t_band)
+
+
+def not_computed(reason: str, **info: Any) -> tuple[float, dict[str, Any]]:
+    """A metric that cannot be computed: NaN (JSON null) and its window entry with the reason."""
+    return math.nan, {**info, "description": f"not computed: {reason}", "not_computed_reason": reason}
 
 
 # ---------------------------------------------------------------------------
@@ -170,6 +265,9 @@ def amplitude_spectrum(
         raise ValueError(f"fundamental frequency must be positive, got {f1_hz!r}")
     sl = window_slice(dt_s, t0, t1, x.shape[0])
     avail = sl.stop - sl.start
+    if not f1_hz < 0.5 / dt_s:
+        raise ValueError(f"fundamental {f1_hz:.4g} Hz is not below the Nyquist frequency fs/2 = "
+                         f"{0.5 / dt_s:.4g} Hz of the {dt_s:g} s sampling")
     per_period = 1.0 / (f1_hz * dt_s)  # samples per fundamental period
     n_per = int(math.floor(avail / per_period + GRID_TOL))
     if n_per < 1:
@@ -215,6 +313,9 @@ def thd(
     f_lim = min(f_max_hz, 0.5 / dt_s)
     h_max = int(math.floor(f_lim / info["f1_used_hz"] + GRID_TOL))
     h_max = min(h_max, (nbins - 1) // n_per)
+    if h_max < 2:
+        raise ValueError(f"no harmonic h >= 2 of {info['f1_used_hz']:.4g} Hz lies below "
+                         f"min(f_max, fs/2) = {f_lim:.4g} Hz")
     i1 = float(amp[n_per])
     harm = amp[n_per * np.arange(2, h_max + 1)] if h_max >= 2 else np.zeros(0)
     value = 100.0 * float(np.sqrt(np.sum(harm * harm))) / i1 if i1 > 0 else math.nan
@@ -286,12 +387,12 @@ def ripple_summary(trace: Any, psi_ref: Any, run_mask: Any, rip_mask: Any) -> di
     t_stats = ripple_stats(trace.te_nm, trace.torque_ref_nm, rip_mask)
     p_stats = ripple_stats(trace.psi_wb, psi_ref, rip_mask)
     return {
-        "T_rip_RMSE": rmse(trace.te_nm, trace.torque_ref_nm, run_mask),
-        "psi_rip_RMSE": rmse(trace.psi_wb, psi_ref, run_mask),
-        "T_rip_std": t_stats["std"],
-        "T_rip_pp": t_stats["pp"],
-        "psi_rip_std": p_stats["std"],
-        "psi_rip_pp": p_stats["pp"],
+        "T_rip_RMSE_nm": rmse(trace.te_nm, trace.torque_ref_nm, run_mask),
+        "psi_rip_RMSE_wb": rmse(trace.psi_wb, psi_ref, run_mask),
+        "T_rip_std_nm": t_stats["std"],
+        "T_rip_pp_nm": t_stats["pp"],
+        "psi_rip_std_wb": p_stats["std"],
+        "psi_rip_pp_wb": p_stats["pp"],
     }
 
 
@@ -325,13 +426,24 @@ def run_windows(trace: Any, model: Model, stats_window: tuple[float, float] | No
                               "windows_s": [[a, b] for a, b in windows],
                               "n_samples": int(np.count_nonzero(rip_mask)),
                               "description": f"steady windows: last {window_s:g} s of each constant-reference segment",
+                              **_all_steady(trace, model, windows),
                           })
     sl = window_slice(dt, stats_window[0], stats_window[1], n)
     run_mask = np.zeros(n, dtype=bool)
     run_mask[sl] = True
     run_desc = {"t0_s": sample_time(sl.start, dt), "t1_s": sample_time(sl.stop, dt),
                 "n_samples": sl.stop - sl.start, "description": "window given by the caller"}
-    return RunWindows(windows, sl, run_mask, run_desc, run_mask, dict(run_desc))
+    return RunWindows(windows, sl, run_mask, run_desc, run_mask,
+                      {**run_desc, **_all_steady(trace, model, [stats_window])})
+
+
+def _all_steady(trace: Any, model: Model, windows: list[tuple[float, float]]) -> dict[str, Any]:
+    """``steady`` (every window steady) and, when not, ``not_steady_reason`` naming each failing window."""
+    bad = [c for c in (check_steady(trace, model, a, b) for a, b in windows) if not c.steady]
+    if not bad:
+        return {"steady": True}
+    return {"steady": False,
+            "not_steady_reason": " | ".join(f"[{c.t0_s:g}, {c.t1_s:g}) s: {c.reason}" for c in bad)}
 
 
 def thd_ia(trace: Any, model: Model, tw: tuple[float, float] | None, f_max_hz: float,
@@ -341,23 +453,69 @@ def thd_ia(trace: Any, model: Model, tw: tuple[float, float] | None, f_max_hz: f
     ``where`` starts the description (e.g. "i_a over").
     """
     if tw is None:
-        return math.nan, {"description": "no steady window with a nonzero speed reference"}
+        return not_computed("no steady window with a nonzero speed reference")
     try:
         value, info = thd(trace.ia_a, trace.dt_s, tw[0], tw[1], fundamental_hz(trace, model, *tw), f_max_hz)
     except ValueError as exc:
-        return math.nan, {"description": f"THD not computed: {exc}", "window_s": list(tw)}
+        return not_computed(str(exc), window_s=list(tw))
     info["description"] = (f"{where} [{tw[0]:g}, {tw[1]:g}) s, {info['n_periods']} fundamental periods, "
                            f"harmonics {info['harmonics'][0]}..{info['harmonics'][1]}")
+    info.update(check_steady(trace, model, *tw).as_json())
     return value, info
 
 
-def steady_ripples(trace: Any, windows: list[tuple[float, float]], psi_ref: Any) -> list[dict[str, Any]]:
-    """Torque and flux ripple statistics of each steady window (the result's ``steady`` list)."""
+def steady_ripples(trace: Any, model: Model, windows: list[tuple[float, float]],
+                   psi_ref: Any) -> list[dict[str, Any]]:
+    """Torque and flux ripple statistics of each steady window (the result's ``steady`` list), each
+    with its steady-state check (:func:`check_steady`)."""
     rows = []
     for a, b in windows:
         m = window_mask(trace.n, trace.dt_s, (a, b))
         ts = ripple_stats(trace.te_nm, trace.torque_ref_nm, m)
         ps = ripple_stats(trace.psi_wb, psi_ref, m)
-        rows.append({"t0_s": a, "t1_s": b, "T_rip_RMSE": ts["rmse"], "T_rip_std": ts["std"], "T_rip_pp": ts["pp"],
-                     "psi_rip_RMSE": ps["rmse"], "psi_rip_std": ps["std"], "psi_rip_pp": ps["pp"]})
+        rows.append({"t0_s": a, "t1_s": b, "T_rip_RMSE_nm": ts["rmse"], "T_rip_std_nm": ts["std"],
+                     "T_rip_pp_nm": ts["pp"], "psi_rip_RMSE_wb": ps["rmse"], "psi_rip_std_wb": ps["std"],
+                     "psi_rip_pp_wb": ps["pp"], **check_steady(trace, model, a, b).as_json()})
     return rows
+
+
+# ---------------------------------------------------------------------------
+# flags and faults of one run's metric set
+# ---------------------------------------------------------------------------
+#: window entries that cover several metrics (the std/pp ripples over the steady windows)
+WINDOW_GROUPS: dict[str, tuple[str, ...]] = {
+    "ripple_std_pp": ("T_rip_std_nm", "T_rip_pp_nm", "psi_rip_std_wb", "psi_rip_pp_wb"),
+    "ripple_std_pp_Vo": ("T_rip_std_nm", "T_rip_pp_nm", "psi_rip_std_wb", "psi_rip_pp_wb",
+                         "Vo_std_v", "Vo_pp_v", "Vo_mean_v"),
+}
+
+
+def metric_flags(result: dict[str, Any]) -> dict[str, dict[str, str]]:
+    """``not_steady`` and ``not_computed``: metric key -> reason, from the ``window`` entries.
+
+    A metric is not steady when its window entry says ``"steady": false``
+    (:func:`check_steady`), not computed when its value is NaN/None; the
+    reason of a value that is NaN without one is "no samples".
+    """
+    not_steady: dict[str, str] = {}
+    not_computed_: dict[str, str] = {}
+    for entry, info in result.get("window", {}).items():
+        for key in WINDOW_GROUPS.get(entry, (entry,)):
+            if info.get("steady") is False:
+                not_steady[key] = info.get("not_steady_reason", "")
+            if "not_computed_reason" in info:
+                not_computed_[key] = info["not_computed_reason"]
+    for key, value in result.items():
+        if isinstance(value, float) and not math.isfinite(value) and key not in not_computed_:
+            not_computed_[key] = "no samples in its window"
+    for key in not_computed_:
+        not_steady.pop(key, None)
+    return {"not_steady": not_steady, "not_computed": not_computed_}
+
+
+def fault_counts(fault: Any, fault_bits: tuple[tuple[str, int, str], ...]) -> dict[str, Any]:
+    """``faults`` (periods whose guard tripped: the safe decision) and ``fault_counts`` (periods with
+    each fault bit set, by the name of the topology's ``records.FAULT_BITS``)."""
+    f = np.asarray(fault, dtype=np.int64)
+    return {"faults": int(np.count_nonzero(f)),
+            "fault_counts": {name: int(np.count_nonzero(f & bit)) for name, bit, _ in fault_bits}}

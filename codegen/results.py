@@ -9,7 +9,7 @@ import numpy as np
 
 from codegen import __version__
 
-__all__ = ["clean_json", "versions", "fmt_cell"]
+__all__ = ["clean_json", "versions", "fmt_cell", "flagged_cell", "footnotes", "fault_warning", "WINDOW_HEAD", "window_cells"]
 
 
 def clean_json(v: Any) -> Any:
@@ -37,3 +37,47 @@ def versions() -> dict[str, str]:
 def fmt_cell(v: Any, spec: str) -> str:
     """A table cell: ``format(v, spec)``, or ``n/a`` for a missing or non-finite value."""
     return "   n/a" if v is None or (isinstance(v, float) and not math.isfinite(v)) else format(v, spec)
+
+
+def flagged_cell(m: dict[str, Any], key: str, spec: str, scale: float = 1.0) -> str:
+    """A metric's table cell: ``n/a`` when not computed, the value with ``*`` when its window is not
+    steady (``m["not_steady"]``), else the value (``m[key] * scale`` formatted with ``spec``)."""
+    v = m.get(key)
+    if key in m.get("not_computed", {}) or v is None or (isinstance(v, float) and not math.isfinite(v)):
+        return f"{'n/a':>{len(format(0.0, spec))}} "
+    mark = "*" if key in m.get("not_steady", {}) else " "
+    return format(v * scale, spec) + mark
+
+
+def footnotes(rows: dict[str, dict[str, Any]], shown: tuple[str, ...]) -> list[str]:
+    """Footnote lines of a metric table: each ``shown`` metric of each row flagged ``*`` (window not
+    steady) or ``n/a`` (not computed), with its reason."""
+    out: list[str] = []
+    for label, m in rows.items():
+        for key in shown:
+            if key in m.get("not_computed", {}):
+                out.append(f"  n/a {label} {key}: not computed: {m['not_computed'][key]}")
+            elif key in m.get("not_steady", {}):
+                out.append(f"  * {label} {key}: window not steady: {m['not_steady'][key]}")
+    return out
+
+
+def fault_warning(label: str, periods: int, m: dict[str, Any]) -> str | None:
+    """One stderr line for a run whose guard tripped (None when it never did)."""
+    if not m.get("faults"):
+        return None
+    kinds = ", ".join(f"{k} {n}" for k, n in m.get("fault_counts", {}).items() if n)
+    return (f"{label}: {m['faults']} of {periods} periods returned the safe decision "
+            f"(guard faults: {kinds}); its figures describe a tripped drive")
+
+
+#: heading of the cells :func:`window_cells` prints
+WINDOW_HEAD = f"{'THD window/s':>17s} {'f1/Hz':>8s} {'periods':>7s}"
+
+
+def window_cells(info: dict[str, Any]) -> str:
+    """The THD window of a table row: [t0, t1) in s, fundamental f1 in Hz and whole periods in it."""
+    if "n_periods" not in info or "not_computed_reason" in info:
+        return f"{'n/a':>17s} {'n/a':>8s} {'n/a':>7s}"
+    span = f"[{info['t0_s']:.4g}, {info['t1_s']:.4g})"
+    return f"{span:>17s} {info['f1_hz']:8.4g} {info['n_periods']:7d}"

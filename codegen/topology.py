@@ -100,8 +100,10 @@ class Topology(Protocol):
         """The baseline's recorded closed-loop run every strategy is benchmarked on."""
         ...
 
-    def simulate(self, model: Model, strategies: list[str], plots: Path | None, log: Log) -> dict:
-        """The config's scenario for each strategy: JSON-ready metrics plus a printable ``_table``."""
+    def simulate(self, model: Model, strategies: list[str], plots: Path | None, log: Log,
+                 traces: Path | None = None) -> dict:
+        """The config's scenario for each strategy: JSON-ready metrics plus a printable ``_table`` and
+        ``_warnings`` (stderr lines); ``traces``: write the time series there (npz, or CSV)."""
         ...
 
     def sweep_eps(self, model: Model, eps_list: list[float], log: Log) -> dict:

@@ -9,7 +9,7 @@ from codegen.cli import main
 
 from conftest import IPMSM, SPMSM, TWO_LEVEL
 
-KEYS = ("T_rip_RMSE", "psi_rip_RMSE", "THD_ia", "f_ave_hz", "Cal_ave", "wall_s")
+KEYS = ("T_rip_RMSE_nm", "psi_rip_RMSE_wb", "THD_ia_percent", "f_ave_hz", "Cal_ave", "wall_s")
 
 
 @pytest.mark.parametrize("cfg,duration", [(SPMSM, 4.0), (IPMSM, 2.0)], ids=["spmsm", "ipmsm"])
@@ -26,7 +26,7 @@ def test_simulate_writes_metrics_and_plots(tmp_path, capsys, cfg, duration):
             assert isinstance(m[k], float), (s, k)
         assert m["periods"] == round(duration / 50e-6)
         assert m["faults"] == 0
-        assert 0 < m["T_rip_RMSE"] < 3.0 and 0 < m["psi_rip_RMSE"] < 0.05 and 0 < m["THD_ia"] < 20
+        assert 0 < m["T_rip_RMSE_nm"] < 3.0 and 0 < m["psi_rip_RMSE_wb"] < 0.05 and 0 < m["THD_ia_percent"] < 20
         assert 1e3 < m["f_ave_hz"] < 20e3
     cal = {s: data["strategies"][s]["Cal_ave"] for s in TWO_LEVEL}
     assert cal["conventional"] == 7.0

@@ -2,16 +2,16 @@
 
 Definitions (docs/simulation.md "Metrics", mpdtc-three-level.md):
 
-* ``T_rip_RMSE = sqrt(mean((Te - T*)^2))`` (plant Te at the sample instants,
+* ``T_rip_RMSE_nm = sqrt(mean((Te - T*)^2))`` (plant Te at the sample instants,
   T* the reference given to the controller).
-* ``psi_rip_RMSE = sqrt(mean((|psi_s| - psi*)^2))`` with psi* the
+* ``psi_rip_RMSE_wb = sqrt(mean((|psi_s| - psi*)^2))`` with psi* the
   CONTROLLER's flux reference of the same period (``trace.psi_ref_wb``; the
   three-level psi* follows T* by MTPA, so it is not a constant).
-* ``THD_ia``: :func:`codegen.metrics.thd` of i_a (harmonics up to 10 kHz or
+* ``THD_ia_percent``: :func:`codegen.metrics.thd` of i_a (harmonics up to 10 kHz or
   fs/2) over the last steady window with nonzero speed.
-* ``Vo_std``, ``Vo_pp``, ``Vo_mean``: neutral-point voltage V_o = (u_c1 -
+* ``Vo_std_v``, ``Vo_pp_v``, ``Vo_mean_v``: neutral-point voltage V_o = (u_c1 -
   u_c2)/2 of the plant at the sample instants, over the steady windows.
-* ``THD_uab``: THD of the switched line voltage u_ab at sub-period
+* ``THD_uab_percent``: THD of the switched line voltage u_ab at sub-period
   resolution.  The piecewise-constant waveform (one value per applied
   segment, zero-length segments skipped) is resampled onto a uniform grid of
   about ``uab_grid_s`` = 1 us by exact box averaging (the mean of the
@@ -35,7 +35,11 @@ Definitions (docs/simulation.md "Metrics", mpdtc-three-level.md):
 Windows (:func:`codegen.metrics.run_windows`): RMSE, f_ave, Cal_ave
 and the jump histogram over the whole run (or ``stats_window``); std/pp of the
 ripples and V_o over the steady windows (last ``window_s`` of each
-constant-reference segment).
+constant-reference segment, ``scenario.window_s``), each checked by
+:func:`codegen.metrics.check_steady` (``not_steady`` names the metrics whose
+window is not steady, ``not_computed`` those that could not be computed,
+each with the reason); ``faults``/``fault_counts`` count the guard trips by
+the names of ``records.FAULT_BITS``.
 """
 from __future__ import annotations
 
@@ -46,7 +50,11 @@ import numpy as np
 
 from codegen.metrics import (
     GRID_TOL,
+    check_steady,
+    fault_counts,
     fundamental_hz,
+    metric_flags,
+    not_computed,
     ripple_summary,
     run_windows,
     sample_time,
@@ -58,6 +66,7 @@ from codegen.metrics import (
     window_slice,
 )
 from codegen.model import Model
+from codegen.topologies.ttype.records import FAULT_BITS
 
 if TYPE_CHECKING:  # pragma: no cover
     from codegen.topologies.ttype.sim import Trace
@@ -207,12 +216,14 @@ def leg_level_changes(seg_states: Any, seg_s: Any, initial_state: int = _OOO) ->
 # all three-level metrics of one run
 # ---------------------------------------------------------------------------
 def three_level_metrics(
-    trace: Trace, model: Model, stats_window: tuple[float, float] | None = None, window_s: float = 0.2,
+    trace: Trace, model: Model, stats_window: tuple[float, float] | None = None, window_s: float | None = None,
     f_max_hz: float = 10e3,
     uab_grid_s: float = UAB_GRID_S,
     uab_f_max_hz: float = UAB_F_MAX_HZ,
 ) -> dict[str, Any]:
-    """The three-level metric set of one closed-loop run (JSON-ready values)."""
+    """The three-level metric set of one closed-loop run (JSON-ready values; ``window_s`` defaults to
+    ``scenario.window_s``)."""
+    window_s = model.scenario.window_s if window_s is None else window_s
     dt = trace.dt_s
     psi_ref = trace.psi_ref_wb.astype(np.float64)
     w = run_windows(trace, model, stats_window, window_s, "whole run")
@@ -230,10 +241,9 @@ def three_level_metrics(
         "mean": float(np.mean(vo)) if vo.size else math.nan,
     }
 
-    thd_uab = math.nan
     tw = thd_window(trace, model, window_s)
     thd_ia_value, ia_info = thd_ia(trace, model, tw, f_max_hz, "i_a over")
-    uab_info: dict[str, Any] = {"description": "no steady window with a nonzero speed reference"}
+    thd_uab, uab_info = not_computed("no steady window with a nonzero speed reference")
     if tw is not None:
         try:
             thd_uab, uab_info = uab_thd(trace, tw[0], tw[1], fundamental_hz(trace, model, *tw), uab_grid_s,
@@ -244,32 +254,33 @@ def three_level_metrics(
                 f"{uab_info['grid_s'] * 1e6:.4g} us grid, harmonics "
                 f"{uab_info['harmonics'][0]}..{uab_info['harmonics'][1]} (<= {uab_f_max_hz:g} Hz)"
             )
+            uab_info.update(check_steady(trace, model, *tw).as_json())
         except ValueError as exc:
-            uab_info = {"description": f"THD not computed: {exc}", "window_s": list(tw)}
+            thd_uab, uab_info = not_computed(str(exc), window_s=list(tw))
 
     jumps = line_jump_histogram(trace.uab_v[sl], trace.seg_s[sl], trace.udc_v, uab_before)
     legs = int(np.sum(trace.leg_changes[sl], dtype=np.int64))
 
-    steady = steady_ripples(trace, w.windows, psi_ref)
+    steady = steady_ripples(trace, model, w.windows, psi_ref)
     for row in steady:
         v = trace.vo_v[window_mask(trace.n, dt, (row["t0_s"], row["t1_s"]))]
-        row["Vo_std"] = float(np.std(v)) if v.size else math.nan
-        row["Vo_pp"] = float(np.ptp(v)) if v.size else math.nan
+        row["Vo_std_v"] = float(np.std(v)) if v.size else math.nan
+        row["Vo_pp_v"] = float(np.ptp(v)) if v.size else math.nan
 
-    return {
+    out = {
         **ripple_summary(trace, psi_ref, w.run_mask, w.rip_mask),
-        "THD_ia": thd_ia_value,
-        "THD_uab": thd_uab,
-        "Vo_std": vo_stats["std"],
-        "Vo_pp": vo_stats["pp"],
-        "Vo_mean": vo_stats["mean"],
+        "THD_ia_percent": thd_ia_value,
+        "THD_uab_percent": thd_uab,
+        "Vo_std_v": vo_stats["std"],
+        "Vo_pp_v": vo_stats["pp"],
+        "Vo_mean_v": vo_stats["mean"],
         "jump_hist_udc2": jumps["counts"],
         "max_line_jump_udc2": jumps["max_udc2"],
         "f_ave_hz": legs / (3.0 * t_run) if t_run > 0 else math.nan,
         "Cal_ave": float(np.mean(trace.n_eval[sl])) if sl.stop > sl.start else math.nan,
         "window": {
-            "T_rip_RMSE": run_desc,
-            "psi_rip_RMSE": {**run_desc, "reference": "controller psi_ref_wb of each period"},
+            "T_rip_RMSE_nm": run_desc,
+            "psi_rip_RMSE_wb": {**run_desc, "reference": "controller psi_ref_wb of each period"},
             "f_ave_hz": {**run_desc, "definition": "one-level leg changes / (3 legs * t)"},
             "Cal_ave": run_desc,
             "jump_hist_udc2": {
@@ -280,8 +291,10 @@ def three_level_metrics(
                 "n_jumps": jumps["n_jumps"],
             },
             "ripple_std_pp_Vo": w.rip_desc,
-            "THD_ia": ia_info,
-            "THD_uab": uab_info,
+            "THD_ia_percent": ia_info,
+            "THD_uab_percent": uab_info,
         },
         "steady": steady,
+        **fault_counts(trace.fault, FAULT_BITS),
     }
+    return {**out, **metric_flags(out)}

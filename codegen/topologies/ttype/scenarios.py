@@ -1,6 +1,8 @@
 """``mpcgen simulate`` for a T-type three-level config (mpdtc-three-level.md section 3).
 
-Scenarios of the spec: steady state at 300, 1800 and 3000 r/min with the
+``scenario.set = "config"`` (the default) runs the config's ``[scenario]``
+from standstill, one run per strategy.  ``scenario.set = "mpdtc-table5"``
+runs the MPDTC paper's Table 5 set: steady state at 300, 1800 and 3000 r/min with the
 speed held by the load machine and T* = 1.27 N*m, and the rated-speed load
 step 0 -> 1.27 N*m under the speed PI.  Each strategy variant runs its
 compiled step inside the compiled closed loop (seven-segment integration).
@@ -15,13 +17,18 @@ from collections.abc import Callable
 from pathlib import Path
 
 from codegen.model import Model
+from codegen.results import WINDOW_HEAD, fault_warning, footnotes, versions, window_cells
 from codegen.results import clean_json as _clean
+from codegen.results import flagged_cell as flagged
 from codegen.results import fmt_cell as _fmt
-from codegen.results import versions
+from codegen.simulator.driver import trace_fields
+from codegen.simulator.export import TraceWriter
+from codegen.simulator.memory import check_trace_memory
 from codegen.topologies.ttype.metrics import three_level_metrics
 
 STEADY_SPEEDS_RPM = (300.0, 1800.0, 3000.0)
-KEYS = ("T_rip_RMSE", "psi_rip_RMSE", "THD_ia", "Vo_std", "THD_uab", "max_line_jump_udc2", "f_ave_hz", "Cal_ave")
+KEYS = ("T_rip_RMSE_nm", "psi_rip_RMSE_wb", "THD_ia_percent", "Vo_std_v", "THD_uab_percent", "max_line_jump_udc2",
+        "f_ave_hz", "Cal_ave")
 
 
 def steady_model(model: Model, speed_rpm: float) -> Model:
@@ -52,47 +59,120 @@ def _run(model: Model, log: Callable[[str], None], label: str, initial_speed_rpm
     return trace, time.perf_counter() - t0
 
 
+def _row(label: str, s: str, m: dict) -> str:
+    """One table row: the metrics (``*`` not steady, ``n/a`` not computed), faults, THD window."""
+    return (f"{label:>6s} {s:9s} {flagged(m, 'T_rip_RMSE_nm', '9.4f')}{flagged(m, 'psi_rip_RMSE_wb', '10.5f')}"
+            f"{flagged(m, 'THD_ia_percent', '8.2f')}{flagged(m, 'Vo_std_v', '8.4f')}"
+            f"{flagged(m, 'THD_uab_percent', '9.2f')}{m['max_line_jump_udc2']:4d} {flagged(m, 'Cal_ave', '5.2f')}"
+            f"{flagged(m, 'f_ave_hz', '9.2f', 1e-3)}{m['faults']:7d} {window_cells(m['window']['THD_ia_percent'])}")
+
+
+HEAD = (f"{'run':>6s} {'strategy':9s} {'T_rip/N*m':>9s}  {'psi_rip/Wb':>10s}  {'THD_ia/%':>8s}  {'Vo_std/V':>8s}  "
+        f"{'THD_uab/%':>9s}  {'jump':>4s} {'Cal':>5s}  {'f_ave/kHz':>9s}  {'faults':>6s} {WINDOW_HEAD}")
+
+
 def table5(results: dict, strategies: list[str]) -> str:
-    """Seed-000 Table 5 layout (+ V_o, u_ab THD, max jump) and the 63-vs-27 reduction."""
-    head = f"{'speed':>6s} {'strategy':9s} {'T_rip/N*m':>9s} {'psi_rip/Wb':>10s} {'THD_ia/%':>8s} {'Vo_std/V':>8s} {'THD_uab/%':>9s} {'jump':>4s} {'Cal':>5s} {'f_ave/kHz':>9s}"
-    rows = [head]
-    for speed in STEADY_SPEEDS_RPM:
-        key = f"{speed:g}rpm"
+    """Seed-000 Table 5 layout (+ V_o, u_ab THD, max jump, faults, THD window) and the 63-vs-27
+    reduction; the rated-speed load step last."""
+    rows = [HEAD]
+    notes: dict[str, dict] = {}
+    for key, label in [*((f"{v:g}rpm", f"{v:.0f}") for v in STEADY_SPEEDS_RPM), ("load_step", "load")]:
         for s in strategies:
             m = results[s][key]
-            rows.append(f"{speed:6.0f} {s:9s} {_fmt(m['T_rip_RMSE'], '9.4f')} {_fmt(m['psi_rip_RMSE'], '10.5f')} "
-                        f"{_fmt(m['THD_ia'], '8.2f')} {_fmt(m['Vo_std'], '8.4f')} {_fmt(m['THD_uab'], '9.2f')} "
-                        f"{m['max_line_jump_udc2']:4d} {_fmt(m['Cal_ave'], '5.2f')} {_fmt(m['f_ave_hz'] / 1e3, '9.2f')}")
-        if "mpdtc27" in strategies and "mpdtc63" in strategies:
+            rows.append(_row(label, s, m))
+            notes[f"{s} {key}"] = m
+        if key != "load_step" and "mpdtc27" in strategies and "mpdtc63" in strategies:
             a, b = results["mpdtc27"][key], results["mpdtc63"][key]
-            red = [100 * (1 - b[k] / a[k]) if a[k] else float("nan") for k in ("T_rip_RMSE", "psi_rip_RMSE", "THD_ia")]
-            rows.append(f"{'':6s} {'reduction':9s} {red[0]:8.1f}% {red[1]:9.1f}% {red[2]:7.1f}%")
-    return "\n".join(rows)
+            red = [100 * (1 - b[k] / a[k]) if a[k] else float("nan")
+                   for k in ("T_rip_RMSE_nm", "psi_rip_RMSE_wb", "THD_ia_percent")]
+            rows.append(f"{'':6s} {'reduction':9s} {_fmt(red[0], '8.1f')}% {_fmt(red[1], '9.1f')}% "
+                        f"{_fmt(red[2], '7.1f')}%")
+    return "\n".join(rows + footnotes(notes, KEYS))
+
+
+def config_table(results: dict, strategies: list[str]) -> str:
+    """The config's scenario: one row per strategy (metrics, faults, THD window), footnotes."""
+    rows = [HEAD] + [_row("config", s, results[s]["scenario"]) for s in strategies]
+    return "\n".join(rows + footnotes({s: results[s]["scenario"] for s in strategies}, KEYS))
+
+
+def runs_of(variant: Model) -> list[tuple[str, Model, float]]:
+    """(key, model, initial speed r/min) of every run: the config's scenario from standstill
+    (``scenario.set = "config"``), or the Table 5 set (``"mpdtc-table5"``)."""
+    if variant.scenario.set != "mpdtc-table5":
+        return [("scenario", variant, 0.0)]
+    runs = [(f"{v:g}rpm", steady_model(variant, v), 0.0) for v in STEADY_SPEEDS_RPM]  # speed imposed anyway
+    runs.append(("load_step", load_step_model(variant), variant.motor.rated_speed_rpm))
+    return runs
 
 
 def run_three_level(model: Model, strategies: list[str], plots: Path | None = None,
-                    log: Callable[[str], None] = print) -> dict:
-    """Every strategy at every steady speed, plus the load step; JSON-ready dict with ``_table``."""
-    results: dict[str, dict] = {}
-    for s in strategies:
-        variant = model.with_controller(strategy=s)
-        results[s] = {}
-        runs = [(f"{v:g}rpm", steady_model(variant, v), v) for v in STEADY_SPEEDS_RPM]
-        runs.append(("load_step", load_step_model(variant), variant.motor.rated_speed_rpm))
-        for key, m, speed in runs:
-            log(f"simulate {model.name} / {s} / {key}: {m.scenario.duration_s:g} s")
-            start = speed if key == "load_step" else 0.0  # steady runs: speed imposed anyway
-            trace, wall = _run(m, log, f"{s} {key}", initial_speed_rpm=start)
-            met = three_level_metrics(trace, m)
-            met["wall_s"] = wall
-            met["periods_per_s"] = trace.n / wall if wall > 0 else 0.0
-            if plots is not None:
-                from codegen.topologies.ttype.plots import plot_three_level
+                    log: Callable[[str], None] = print, traces: Path | None = None) -> dict:
+    """Every strategy over the runs of :func:`runs_of`; JSON-ready dict with ``_table`` and ``_warnings``.
 
-                met["plots"] = [str(p) for p in plot_three_level(trace, m, s if key != "load_step" else f"{s}_loadstep", speed, plots)]
-            results[s][key] = met
-    text = (f"{model.name}: steady state at 300/1800/3000 r/min, T* = {model.motor.rated_torque_nm:g} N*m, "
-            f"{model.scenario.duration_s:g} s each (seed 000 Table 5 layout; jump = largest line-voltage jump in Udc/2)\n"
-            + table5(results, strategies))
+    Every run's trace memory is checked before anything runs
+    (:func:`~codegen.simulator.memory.check_trace_memory`); ``traces``:
+    write the time series there (:class:`~codegen.simulator.export.TraceWriter`).
+    """
+    from codegen.topologies.ttype.sim import TRACE
+
+    for _key, m, _speed in runs_of(model):
+        check_trace_memory(m, TRACE)
+    results: dict[str, dict] = {}
+    warnings: list[str] = []
+    writer = TraceWriter(traces, list(trace_fields(TRACE))) if traces is not None else None
+    try:
+        for s in strategies:
+            variant = model.with_controller(strategy=s)
+            results[s] = {}
+            for key, m, speed in runs_of(variant):
+                log(f"simulate {model.name} / {s} / {key}: {m.scenario.duration_s:g} s")
+                trace, wall = _run(m, log, f"{s} {key}", initial_speed_rpm=speed)
+                met = three_level_metrics(trace, m)
+                met["wall_s"] = wall
+                met["periods_per_s"] = trace.n / wall if wall > 0 else 0.0
+                if plots is not None:
+                    from codegen.topologies.ttype.plots import plot_three_level
+
+                    tag = s if key != "load_step" else f"{s}_loadstep"
+                    plot_speed = speed if key == "load_step" else _plot_speed(m)
+                    met["plots"] = [str(p) for p in plot_three_level(trace, m, tag, plot_speed, plots)]
+                if writer is not None:
+                    writer.add(s, key, trace)
+                met["_periods"] = trace.n
+                results[s][key] = met
+            warning = _fault_warning(s, results[s])
+            if warning:
+                warnings.append(warning)
+    finally:
+        if writer is not None:
+            writer.close()
+    sc = model.scenario
+    if sc.set == "mpdtc-table5":
+        text = (f"{model.name}: steady state at 300/1800/3000 r/min, T* = {model.motor.rated_torque_nm:g} N*m, "
+                f"{sc.duration_s:g} s each, and the rated load step (seed 000 Table 5 layout; jump = largest "
+                "line-voltage jump in Udc/2; RMSE, f_ave, Cal over the whole run, THD over the last "
+                f"{sc.window_s:g} s window, its steady state checked)\n" + table5(results, strategies))
+    else:
+        text = (f"{model.name}: {sc.duration_s:g} s scenario ({sc.speed_mode} speed), dt "
+                f"{model.controller.dt_s * 1e6:g} us (RMSE, f_ave, Cal over the whole run; THD over the last "
+                f"{sc.window_s:g} s window with nonzero speed, its steady state checked; jump = largest "
+                "line-voltage jump in Udc/2)\n" + config_table(results, strategies))
     return _clean({"config": model.name, "config_hash": model.config_hash(), "versions": versions(),
-                   "strategies": results, "_table": text})
+                   "scenario_set": sc.set, "strategies": results, "_table": text, "_warnings": warnings})
+
+
+def _plot_speed(m: Model) -> float:
+    """The speed a run's plots are named after: its last speed reference, r/min."""
+    return float(max(m.scenario.speed_ref_rpm, key=lambda step: step[0])[1])
+
+
+def _fault_warning(strategy: str, runs: dict[str, dict]) -> str | None:
+    """One stderr line for a strategy whose guard tripped in any of its runs (counts summed)."""
+    periods = sum(int(m.pop("_periods")) for m in runs.values())
+    counts: dict[str, int] = {}
+    for m in runs.values():
+        for k, n in m["fault_counts"].items():
+            counts[k] = counts.get(k, 0) + n
+    total = {"faults": sum(m["faults"] for m in runs.values()), "fault_counts": counts}
+    return fault_warning(strategy, periods, total)

@@ -3,36 +3,51 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from codegen.metrics import cal_ave, f_ave_hz, ripple_summary, run_windows, steady_ripples, thd_ia, thd_window
+from codegen.metrics import (
+    cal_ave,
+    f_ave_hz,
+    fault_counts,
+    metric_flags,
+    ripple_summary,
+    run_windows,
+    steady_ripples,
+    thd_ia,
+    thd_window,
+)
 from codegen.model import Model
+from codegen.topologies.twolevel.records import FAULT_BITS
 
 if TYPE_CHECKING:  # pragma: no cover
     from codegen.topologies.twolevel.sim import Trace
 
 
 def two_level_metrics(
-    trace: Trace, model: Model, stats_window: tuple[float, float] | None = None, window_s: float = 0.2,
+    trace: Trace, model: Model, stats_window: tuple[float, float] | None = None, window_s: float | None = None,
     f_max_hz: float = 10e3,
 ) -> dict[str, Any]:
     """The seed-001 metric set of one closed-loop run (JSON-ready values).
 
     Windows (stated in the result under ``window``):
 
-    * ``T_rip_RMSE``, ``psi_rip_RMSE`` (eq. (7)-(8)), ``f_ave_hz`` (eq. (9))
+    * ``T_rip_RMSE_nm``, ``psi_rip_RMSE_wb`` (eq. (7)-(8)), ``f_ave_hz`` (eq. (9))
       and ``Cal_ave`` (eq. (10)): over the whole run, as the seed's Tables 2
       and 9 do (n = all samples, t = the simulated time), or over
       ``stats_window`` = (t0, t1) when given.
-    * ``T_rip_std``, ``T_rip_pp``, ``psi_rip_std``, ``psi_rip_pp``: ripple of
+    * ``T_rip_std_nm``, ``T_rip_pp_nm``, ``psi_rip_std_wb``, ``psi_rip_pp_wb``: ripple of
       the error about its mean, over the steady windows (the last
-      ``window_s`` of each constant-reference segment, :func:`steady_windows`),
+      ``window_s`` (default ``scenario.window_s``) of each constant-reference segment),
       so that start-up and reversal transients do not dominate them; or over
       ``stats_window`` when given.
-    * ``THD_ia`` (percent): over the last steady window with a nonzero speed
+    * ``THD_ia_percent``: over the last steady window with a nonzero speed
       reference (:func:`thd_window`), f1 from the mean electrical speed there,
       harmonics up to ``f_max_hz``; NaN (with the reason) if there is none.
 
-    ``steady`` lists the ripple statistics of each steady window.
+    ``steady`` lists the ripple statistics of each steady window.  Every
+    window is checked (:func:`codegen.metrics.check_steady`): its entry says
+    ``"steady"`` and, when false, ``not_steady_reason``; ``not_steady`` and
+    ``not_computed`` map metric keys to reasons (:func:`codegen.metrics.metric_flags`).
     """
+    window_s = model.scenario.window_s if window_s is None else window_s
     psi_ref = float(model.controller.psi_ref_wb)
     w = run_windows(trace, model, stats_window, window_s,
                     "whole run, as seed 001 eq. (7)-(10) (n = all samples, t = simulated time)")
@@ -42,18 +57,20 @@ def two_level_metrics(
     thd_value, thd_info = thd_ia(trace, model, thd_window(trace, model, window_s), f_max_hz,
                                  "i_a over the last steady window with nonzero speed")
 
-    return {
+    out = {
         **ripple_summary(trace, psi_ref, w.run_mask, w.rip_mask),
-        "THD_ia": thd_value,
+        "THD_ia_percent": thd_value,
         "f_ave_hz": f_ave_hz(trace.applied_sw[sl], t_run, sw0),
         "Cal_ave": cal_ave(trace.n_eval[sl]),
         "window": {
-            "T_rip_RMSE": run_desc,
-            "psi_rip_RMSE": run_desc,
+            "T_rip_RMSE_nm": run_desc,
+            "psi_rip_RMSE_wb": run_desc,
             "f_ave_hz": {**run_desc, "definition": "leg state changes / (3 legs * t), = N_switching/(6 t) of seed eq. (9)"},
             "Cal_ave": run_desc,
             "ripple_std_pp": w.rip_desc,
-            "THD_ia": thd_info,
+            "THD_ia_percent": thd_info,
         },
-        "steady": steady_ripples(trace, w.windows, psi_ref),
+        "steady": steady_ripples(trace, model, w.windows, psi_ref),
+        **fault_counts(trace.fault, FAULT_BITS),
     }
+    return {**out, **metric_flags(out)}

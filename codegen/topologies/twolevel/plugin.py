@@ -65,8 +65,8 @@ def trajectory(model: Model, progress: Progress | None = None) -> Trajectory:
     return record_trajectory(base, lib, sim.run_closed_loop, sim.controller_inputs, progress)
 
 
-def simulate(model: Model, chosen: list[str], plots: Path | None, log: Log) -> dict:
-    return scenarios.run_scenarios(model, chosen, plots=plots, log=log)
+def simulate(model: Model, chosen: list[str], plots: Path | None, log: Log, traces: Path | None = None) -> dict:
+    return scenarios.run_scenarios(model, chosen, plots=plots, log=log, traces=traces)
 
 
 def sweep_eps(model: Model, eps_list: list[float], log: Log) -> dict:

@@ -15,9 +15,13 @@ from pathlib import Path
 import numpy as np
 
 from codegen.model import Model
+from codegen.results import WINDOW_HEAD, fault_warning, footnotes, versions, window_cells
 from codegen.results import clean_json as _clean
+from codegen.results import flagged_cell as flagged
 from codegen.results import fmt_cell as _fmt
-from codegen.results import versions
+from codegen.simulator.driver import trace_fields
+from codegen.simulator.export import TraceWriter
+from codegen.simulator.memory import check_trace_memory
 from codegen.topologies.twolevel.hostbuild import build_host_library
 from codegen.topologies.twolevel.metrics import two_level_metrics
 from codegen.topologies.twolevel.switch_tables import tables_for
@@ -35,42 +39,66 @@ def run_variant(model: Model, log: Callable[[str], None]):
     return trace, time.perf_counter() - t0
 
 
+#: the metrics table9 prints
+SHOWN = ("T_rip_RMSE_nm", "psi_rip_RMSE_wb", "THD_ia_percent", "Cal_ave", "f_ave_hz")
+
+
 def table9(results: dict[str, dict]) -> str:
-    """Seed-001 Table 9 layout: T_rip, psi_rip, THD, Cal_ave, f_ave per strategy."""
-    rows = [f"{'strategy':12s} {'T_rip/N*m':>10s} {'psi_rip/Wb':>11s} {'THD/%':>7s} {'Cal_ave':>8s} {'f_ave/kHz':>10s} {'wall/s':>7s}"]
+    """Seed-001 Table 9 layout: T_rip, psi_rip, THD, Cal_ave, f_ave per strategy, the guard faults and
+    the THD window (t0, t1), its fundamental and number of periods; ``*``/``n/a`` footnoted."""
+    rows = [f"{'strategy':12s} {'T_rip/N*m':>10s} {'psi_rip/Wb':>11s} {'THD/%':>8s} {'Cal_ave':>8s} {'f_ave/kHz':>10s} "
+            f"{'faults':>7s} {'wall/s':>7s} {WINDOW_HEAD}"]
     for s, m in results.items():
-        rows.append(f"{s:12s} {_fmt(m['T_rip_RMSE'], '10.4f')} {_fmt(m['psi_rip_RMSE'], '11.4f')} "
-                    f"{_fmt(m['THD_ia'], '7.2f')} {_fmt(m['Cal_ave'], '8.2f')} {_fmt(m['f_ave_hz'] / 1e3, '10.2f')} "
-                    f"{m['wall_s']:7.2f}")
-    return "\n".join(rows)
+        rows.append(f"{s:12s} {flagged(m, 'T_rip_RMSE_nm', '10.4f')}{flagged(m, 'psi_rip_RMSE_wb', '11.4f')}"
+                    f"{flagged(m, 'THD_ia_percent', '8.2f')}{flagged(m, 'Cal_ave', '8.2f')}"
+                    f"{flagged(m, 'f_ave_hz', '10.2f', 1e-3)}{m['faults']:7d} {m['wall_s']:7.2f} "
+                    f"{window_cells(m['window']['THD_ia_percent'])}")
+    return "\n".join(rows + footnotes(results, SHOWN))
 
 
 def run_scenarios(model: Model, strategies: list[str], plots: Path | None = None,
-                  log: Callable[[str], None] = print) -> dict:
-    """Every strategy over the config's scenario; JSON-ready dict plus ``_table``."""
-    results: dict[str, dict] = {}
-    for s in strategies:
-        variant = model.with_controller(strategy=s)
-        log(f"simulate {model.name} / {s}: {model.scenario.duration_s:g} s scenario")
-        trace, wall = run_variant(variant, log)
-        m = two_level_metrics(trace, variant)
-        m["wall_s"] = wall
-        m["periods"] = int(len(trace.t_s))
-        m["periods_per_s"] = len(trace.t_s) / wall if wall > 0 else 0.0
-        m["faults"] = int(np.count_nonzero(trace.fault))
-        if plots is not None:
-            from codegen.topologies.twolevel.plots import plot_two_level
+                  log: Callable[[str], None] = print, traces: Path | None = None) -> dict:
+    """Every strategy over the config's scenario; JSON-ready dict plus ``_table`` and ``_warnings``
+    (one line per strategy whose guard tripped).  ``traces``: write the time series there
+    (:class:`~codegen.simulator.export.TraceWriter`).  A run whose trace would not fit in memory
+    is refused before anything runs (:func:`~codegen.simulator.memory.check_trace_memory`)."""
+    from codegen.topologies.twolevel.sim import TRACE
 
-            m["plots"] = [str(p) for p in plot_two_level(trace, variant, s, plots)]
-        results[s] = m
+    check_trace_memory(model, TRACE)
+    results: dict[str, dict] = {}
+    warnings: list[str] = []
+    writer = TraceWriter(traces, list(trace_fields(TRACE))) if traces is not None else None
+    try:
+        for s in strategies:
+            variant = model.with_controller(strategy=s)
+            log(f"simulate {model.name} / {s}: {model.scenario.duration_s:g} s scenario")
+            trace, wall = run_variant(variant, log)
+            m = two_level_metrics(trace, variant)
+            m["wall_s"] = wall
+            m["periods"] = int(len(trace.t_s))
+            m["periods_per_s"] = len(trace.t_s) / wall if wall > 0 else 0.0
+            if plots is not None:
+                from codegen.topologies.twolevel.plots import plot_two_level
+
+                m["plots"] = [str(p) for p in plot_two_level(trace, variant, s, plots)]
+            if writer is not None:
+                writer.add(s, "scenario", trace)
+            warning = fault_warning(s, m["periods"], m)
+            if warning:
+                warnings.append(warning)
+            results[s] = m
+    finally:
+        if writer is not None:
+            writer.close()
     text = (f"{model.name}: {model.scenario.duration_s:g} s scenario, dt {model.controller.dt_s * 1e6:g} us "
-            f"(seed 001 Table 9 layout; RMSE, f_ave, Cal_ave over the whole run, THD over the last steady window)\n"
+            f"(seed 001 Table 9 layout; RMSE, f_ave, Cal_ave over the whole run, THD over the last "
+            f"{model.scenario.window_s:g} s window with nonzero speed, its steady state checked)\n"
             + table9(results))
     return _clean({
         "config": model.name, "config_hash": model.config_hash(), "versions": versions(),
         "scenario": {"duration_s": model.scenario.duration_s, "speed_ref_rpm": model.scenario.speed_ref_rpm,
-                     "load_nm": model.scenario.load_nm},
-        "strategies": results, "_table": text,
+                     "load_nm": model.scenario.load_nm, "window_s": model.scenario.window_s},
+        "strategies": results, "_table": text, "_warnings": warnings,
     })
 
 
@@ -90,6 +118,9 @@ def zero_vector_utilisation(trace, bands: list[float]) -> list[dict]:
 
 def run_threshold_sweep(model: Model, eps_list: list[float], log: Callable[[str], None] = print) -> dict:
     """Seed Tables 1 and 2: the conventional run's zero-vector use per band, and s1 at every eps_T."""
+    from codegen.topologies.twolevel.sim import TRACE
+
+    check_trace_memory(model, TRACE)
     conv = model.with_controller(strategy="conventional")
     log(f"sweep {model.name}: conventional baseline")
     trace, wall = run_variant(conv, log)
@@ -101,21 +132,25 @@ def run_threshold_sweep(model: Model, eps_list: list[float], log: Callable[[str]
         log(f"sweep {model.name}: s1 eps_T = {eps:g} N*m")
         tr, w = run_variant(variant, log)
         m = two_level_metrics(tr, variant)
-        sweep.append({"eps_t_nm": eps, "T_rip_RMSE": m["T_rip_RMSE"], "psi_rip_RMSE": m["psi_rip_RMSE"],
-                      "Cal_ave": m["Cal_ave"], "f_ave_hz": m["f_ave_hz"], "wall_s": w})
+        sweep.append({"eps_t_nm": eps, "T_rip_RMSE_nm": m["T_rip_RMSE_nm"], "psi_rip_RMSE_wb": m["psi_rip_RMSE_wb"],
+                      "Cal_ave": m["Cal_ave"], "f_ave_hz": m["f_ave_hz"], "faults": m["faults"],
+                      "fault_counts": m["fault_counts"], "wall_s": w})
     lines = ["Table 1 layout: zero-vector utilisation of the conventional run vs torque-error band",
              f"{'band/N*m':>10s} {'N':>7s} {'N_V0':>7s} {'eta_V0/%':>9s}"]
     for r in table1:
         band = f"<= {r['band_nm']:g}" if r["band_nm"] != "all" else "all"
         lines.append(f"{band:>10s} {r['N']:7d} {r['N_V0']:7d} {_fmt(r['eta_V0_percent'], '9.2f')}")
     lines += ["", "Table 2 layout: strategy s1 at each threshold eps_T (whole run)",
-              f"{'eps_T/N*m':>10s} {'T_rip/N*m':>10s} {'psi_rip/Wb':>11s} {'Cal_ave':>8s} {'f_ave/kHz':>10s}"]
+              f"{'eps_T/N*m':>10s} {'T_rip/N*m':>10s} {'psi_rip/Wb':>11s} {'Cal_ave':>8s} {'f_ave/kHz':>10s} {'faults':>7s}"]
     for r in sweep:
-        lines.append(f"{r['eps_t_nm']:10.2f} {r['T_rip_RMSE']:10.4f} {r['psi_rip_RMSE']:11.4f} {r['Cal_ave']:8.2f} {r['f_ave_hz'] / 1e3:10.2f}")
-    lines.append(f"{'conv.':>10s} {base['T_rip_RMSE']:10.4f} {base['psi_rip_RMSE']:11.4f} {base['Cal_ave']:8.2f} {base['f_ave_hz'] / 1e3:10.2f}")
+        lines.append(f"{r['eps_t_nm']:10.2f} {r['T_rip_RMSE_nm']:10.4f} {r['psi_rip_RMSE_wb']:11.4f} {r['Cal_ave']:8.2f} {r['f_ave_hz'] / 1e3:10.2f} {r['faults']:7d}")
+    lines.append(f"{'conv.':>10s} {base['T_rip_RMSE_nm']:10.4f} {base['psi_rip_RMSE_wb']:11.4f} {base['Cal_ave']:8.2f} {base['f_ave_hz'] / 1e3:10.2f} {base['faults']:7d}")
+    warnings = [w for w in [fault_warning("conventional", trace.n, base),
+                            *[fault_warning(f"s1 eps_T {r['eps_t_nm']:g}", trace.n, r) for r in sweep]] if w]
     return _clean({
         "config": model.name, "config_hash": model.config_hash(), "versions": versions(),
         "table1": table1, "table2": sweep,
-        "conventional": {k: base[k] for k in ("T_rip_RMSE", "psi_rip_RMSE", "Cal_ave", "f_ave_hz")},
-        "_table": "\n".join(lines),
+        "conventional": {k: base[k] for k in ("T_rip_RMSE_nm", "psi_rip_RMSE_wb", "Cal_ave", "f_ave_hz", "faults",
+                                              "fault_counts")},
+        "_table": "\n".join(lines), "_warnings": warnings,
     })

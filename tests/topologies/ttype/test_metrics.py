@@ -131,16 +131,16 @@ def test_metrics_and_plots_of_a_run(stub, tmp_path):
         tr = run_closed_loop(ffi, lib, model)
         r = three_level_metrics(tr, model, window_s=0.1)
         results[m_] = r
-        for key in ("T_rip_RMSE", "psi_rip_RMSE", "THD_ia", "THD_uab", "Vo_std", "Vo_pp", "f_ave_hz", "Cal_ave"):
+        for key in ("T_rip_RMSE_nm", "psi_rip_RMSE_wb", "THD_ia_percent", "THD_uab_percent", "Vo_std_v", "Vo_pp_v", "f_ave_hz", "Cal_ave"):
             assert math.isfinite(r[key]) and r[key] >= 0, key
         assert r["Cal_ave"] == m_
         assert r["f_ave_hz"] == pytest.approx(tr.leg_changes.sum() / (3 * tr.duration_s))
         assert sum(r["jump_hist_udc2"]) == np.count_nonzero(tr.seg_s > 0)
         assert r["max_line_jump_udc2"] in (1, 2, 3, 4)
-        assert r["window"]["THD_uab"]["harmonics"][1] == 200  # 200 * 250 Hz = 50 kHz
+        assert r["window"]["THD_uab_percent"]["harmonics"][1] == 200  # 200 * 250 Hz = 50 kHz
         # window statistics: the psi reference is the controller's
         psi_ref = tr.psi_ref_wb.astype(float)
-        assert r["psi_rip_RMSE"] == pytest.approx(float(np.sqrt(np.mean((tr.psi_wb - psi_ref) ** 2))))
+        assert r["psi_rip_RMSE_wb"] == pytest.approx(float(np.sqrt(np.mean((tr.psi_wb - psi_ref) ** 2))))
         paths = plot_three_level(tr, model, f"stub{m_}", 3000, tmp_path)
         assert sorted(p.name for p in paths) == sorted(
             f"stub{m_}_3000rpm_{w}.png" for w in ("torque", "flux", "currents", "vo", "uab"))
@@ -148,7 +148,7 @@ def test_metrics_and_plots_of_a_run(stub, tmp_path):
             data = p.read_bytes()
             assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 5_000
     # the stub's virtual vectors reduce the torque ripple (sanity, not a product claim)
-    assert results[63]["T_rip_RMSE"] < results[27]["T_rip_RMSE"]
+    assert results[63]["T_rip_RMSE_nm"] < results[27]["T_rip_RMSE_nm"]
     # stats window
     r = three_level_metrics(tr, model, stats_window=(0.2, 0.3))
-    assert r["window"]["T_rip_RMSE"]["n_samples"] == 2000
+    assert r["window"]["T_rip_RMSE_nm"]["n_samples"] == 2000

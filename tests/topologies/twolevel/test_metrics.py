@@ -115,20 +115,20 @@ def test_two_level_metrics_keys_and_windows(stub, spmsm_model):
     lib.stub_twolevel_set_echo(0)
     tr = run_closed_loop(ffi, lib, spmsm_model)
     r = two_level_metrics(tr, spmsm_model)
-    for k in ("T_rip_RMSE", "psi_rip_RMSE", "T_rip_std", "T_rip_pp", "psi_rip_std", "psi_rip_pp",
-              "THD_ia", "f_ave_hz", "Cal_ave", "window", "steady"):
+    for k in ("T_rip_RMSE_nm", "psi_rip_RMSE_wb", "T_rip_std_nm", "T_rip_pp_nm", "psi_rip_std_wb", "psi_rip_pp_wb",
+              "THD_ia_percent", "f_ave_hz", "Cal_ave", "window", "steady"):
         assert k in r
-    assert r["T_rip_RMSE"] == pytest.approx(rmse(tr.te_nm, tr.torque_ref_nm))
-    assert r["psi_rip_RMSE"] == pytest.approx(rmse(tr.psi_wb, 0.3))
+    assert r["T_rip_RMSE_nm"] == pytest.approx(rmse(tr.te_nm, tr.torque_ref_nm))
+    assert r["psi_rip_RMSE_wb"] == pytest.approx(rmse(tr.psi_wb, 0.3))
     assert r["f_ave_hz"] == pytest.approx(leg_commutations(tr.sw) / 12.0)
     assert r["Cal_ave"] == pytest.approx(np.mean(tr.n_eval))
-    assert r["window"]["T_rip_RMSE"]["n_samples"] == 80_000
+    assert r["window"]["T_rip_RMSE_nm"]["n_samples"] == 80_000
     assert r["window"]["ripple_std_pp"]["windows_s"] == [[0.8, 1.0], [1.8, 2.0], [2.8, 3.0], [3.8, 4.0]]
-    w = r["window"]["THD_ia"]
+    w = r["window"]["THD_ia_percent"]
     assert w["t0_s"] == 3.8 and w["n_periods"] >= 5 and w["harmonics"][0] == 2
-    assert 0.0 < r["THD_ia"] < 20.0
+    assert 0.0 < r["THD_ia_percent"] < 20.0
     assert len(r["steady"]) == 4
     # a caller-given window applies to all ripple statistics
     r2 = two_level_metrics(tr, spmsm_model, stats_window=(3.8, 4.0))
-    assert r2["T_rip_RMSE"] == pytest.approx(r["steady"][3]["T_rip_RMSE"])
+    assert r2["T_rip_RMSE_nm"] == pytest.approx(r["steady"][3]["T_rip_RMSE_nm"])
     assert r2["window"]["Cal_ave"]["n_samples"] == 4000
