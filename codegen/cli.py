@@ -14,6 +14,7 @@ from pathlib import Path
 from codegen import __version__, cliargs
 from codegen.errors import ConfigError, MpcgenError, UsageError
 from codegen.model import TARGETS, Model
+from codegen.results import write_csv_rows
 from codegen.topology import topology_of
 
 EXIT_OK, EXIT_FAIL, EXIT_BAD_INPUT = 0, 1, 2
@@ -157,7 +158,17 @@ def cmd_tables(args: argparse.Namespace) -> int:
         return EXIT_OK
     if args.output:
         raise UsageError("-o FILE goes with --derive (write the trained switch tables)")
-    print(topology_of(model).tables_text(model, args.utilisation, log=_log(args.quiet)))
+    json_path = cliargs.output_file("--json", args.json)
+    csv_path = cliargs.output_file("--csv", args.csv)
+    topo = topology_of(model)
+    print(topo.tables_text(model, args.utilisation, log=_log(args.quiet)))
+    if json_path or csv_path:
+        rows = topo.tables_rows(model, args.utilisation, log=_log(args.quiet))
+        if json_path:
+            _write_json(str(json_path), {"config": model.name, "config_hash": model.config_hash(),
+                                         "topology": topo.name, "rows": rows})
+        if csv_path:
+            write_csv_rows(csv_path, rows)
     return EXIT_OK
 
 
@@ -225,6 +236,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="run the training and write the s2/s3 tables with their provenance to -o FILE "
                         "(name that file in the config as controller.tables_file)")
     t.add_argument("-o", "--output", help="with --derive: the tables file to write (JSON)")
+    t.add_argument("--json", help="also write the tables as JSON rows (each row names its table)")
+    t.add_argument("--csv", help="also write the tables as CSV (one row per table cell)")
     t.set_defaults(func=cmd_tables)
 
     b = sub.add_parser("bench", help="execution cost per step, all strategies side by side")

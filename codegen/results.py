@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import math
 import platform
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -81,3 +82,16 @@ def window_cells(info: dict[str, Any]) -> str:
         return f"{'n/a':>17s} {'n/a':>8s} {'n/a':>7s}"
     span = f"[{info['t0_s']:.4g}, {info['t1_s']:.4g})"
     return f"{span:>17s} {info['f1_hz']:8.4g} {info['n_periods']:7d}"
+
+
+def write_csv_rows(path: Path, rows: list[dict[str, object]]) -> None:
+    """Rows with possibly different keys as one CSV: the union of the keys, in first-seen order."""
+    import csv
+
+    columns: dict[str, None] = {}
+    for r in rows:
+        columns.update(dict.fromkeys(r))
+    with open(path, "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=list(columns))
+        w.writeheader()
+        w.writerows(rows)

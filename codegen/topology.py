@@ -115,6 +115,10 @@ class Topology(Protocol):
         ``--utilisation`` option (None: the topology's default)."""
         ...
 
+    def tables_rows(self, model: Model, source: str | None, log: Log) -> list[dict[str, object]]:
+        """The same tables as flat rows, each with a ``table`` column (``tables --json/--csv``)."""
+        ...
+
     def export_tables(self, model: Model, path: Path, log: Log) -> str:
         """Run the training and write the trained tables with their provenance (``tables --derive``),
         or Unsupported; returns a one-paragraph summary."""

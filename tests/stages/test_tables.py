@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import re
 
+import pytest
+
 from codegen.cli import main
 
 from conftest import SPMSM
@@ -29,3 +31,26 @@ def test_training_derivation(capsys):
     assert m, out
     # the SPMSM training run re-derives most of the seed's s2 table
     assert int(m.group(1)) >= 8
+
+
+def test_tables_export_json_and_csv(tmp_path):
+    """`tables --json/--csv` write the printed tables as rows, for both topologies."""
+    import csv
+    import json
+
+    from conftest import EXAMPLES
+
+    js, cs = tmp_path / "t.json", tmp_path / "t.csv"
+    assert main(["tables", str(SPMSM), "--utilisation", "published", "--json", str(js), "--csv", str(cs), "-q"]) == 0
+    rows = json.loads(js.read_text())["rows"]
+    s2 = [r for r in rows if r["table"] == "s2_switch_table"]
+    assert len(s2) == 12 and all(r["candidates"].startswith("V0") for r in s2)
+    assert sum(r["percent"] for r in rows if r["table"] == "s2_utilisation" and r["condition"] == 1
+               and r["sector"] == 1) == pytest.approx(100.0, abs=0.5)
+    with open(cs) as fh:
+        assert len(list(csv.DictReader(fh))) == len(rows)
+    assert main(["tables", str(EXAMPLES / "seed000_tlevel.toml"), "--json", str(js), "-q"]) == 0
+    data = json.loads(js.read_text())
+    assert data["topology"] == "t-type"
+    assert sum(r["table"] == "vectors" for r in data["rows"]) == 63
+    assert sum(r["table"] == "candidates" for r in data["rows"]) == 27 * 12

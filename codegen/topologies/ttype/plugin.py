@@ -90,6 +90,11 @@ def tables_text(model: Model, source: str | None, log: Log) -> str:
     return text.tables_report()
 
 
+def tables_rows(model: Model, source: str | None, log: Log) -> list[dict[str, object]]:
+    tables_text(model, source, log)  # the same refusals
+    return text.tables_rows()
+
+
 def export_tables(model: Model, path: Path, log: Log) -> NoReturn:
     raise Unsupported("--derive: t-type candidate tables are derived by search when generating and need "
                       f"no training run; {model.source} has nothing to export (see `mpcgen tables` for them)")

@@ -197,3 +197,19 @@ def tables_report() -> str:
               + ", ".join(f"{n} groups: {k} rows" for n, k in hist.items())
               + f" (paper: {' or '.join(map(str, pub.PUBLISHED_GROUP_COUNTS))})"]
     return "\n".join(lines) + "\n"
+
+
+def tables_rows() -> list[dict[str, object]]:
+    """The derived tables as rows (``tables --json/--csv``): every vector with its 7-segment
+    sequence, and every candidate-table row (state applied last x sector of u*) with its groups."""
+    rows: list[dict[str, object]] = []
+    for i in range(vv.N_VECTORS):
+        seq = vv.virtual_of(i).sequence_names() if vv.is_virtual(i) else ""
+        rows.append({"table": "vectors", "vector_id": i, "name": vv.vector_name(i), "virtual": vv.is_virtual(i),
+                     "sequence": seq})
+    t = cd.derive_candidate_table()
+    for r in t.rows:
+        rows.append({"table": "candidates", "prev_state": v.STATES[r.prev_state].name,
+                     "sector": cd.SECTOR_NAMES[r.sector], "groups": " ".join(cd.row_labels(r)),
+                     "n_groups": r.n_groups, "fallback_from": cd.SECTOR_NAMES[r.source_sector] if r.fallback else ""})
+    return rows

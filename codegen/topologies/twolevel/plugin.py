@@ -77,6 +77,10 @@ def tables_text(model: Model, source: str | None, log: Log) -> str:
     return text.two_level_tables_text(model, source or "training", log)
 
 
+def tables_rows(model: Model, source: str | None, log: Log) -> list[dict[str, object]]:
+    return text.two_level_tables_rows(model, source or "training", log)
+
+
 def export_tables(model: Model, path: Path, log: Log) -> str:
     log(f"training run: conventional controller over the {model.scenario.duration_s:g} s scenario of {model.name}")
     data = switch_tables.export_tables(model, path, progress=lambda f: log(f"  training {f:5.0%}"))

@@ -20,6 +20,7 @@ from codegen.topologies.twolevel.utilisation import (
     format_switch_table,
     format_utilisation,
     published_derivation_report,
+    published_tables,
     published_utilisation,
     utilisation_percent,
 )
@@ -81,3 +82,31 @@ def two_level_tables_text(model: Model, source: str, log: Callable[[str], None])
     parts += ["s3 row dT>0,dpsi>0 vs the paper's published row:",
               format_comparison(compare_tables((s3[0],), (pub.PUBLISHED_S3_ROW,)), "s3")]
     return "\n".join(parts)
+
+
+def two_level_tables_rows(model: Model, source: str, log: Callable[[str], None]) -> list[dict[str, object]]:
+    """The same tables as rows (``tables --json/--csv``): the vector set, the s2/s3 switch tables
+    (from the published utilisation or the training run) and the utilisation they come from."""
+    from codegen.topologies.twolevel.switch_tables import derived_tables
+
+    ux, uy = unit_vectors()
+    rows: list[dict[str, object]] = [
+        {"table": "vector_set", "vector": f"V{v}", "switching_state": "000/111" if v == 0 else f"{sw:03b}",
+         "alpha_pu": float(ux[v]), "beta_pu": float(uy[v])} for v, sw in enumerate(VEC_TO_SW)]
+    d = model.controller.derivation
+    if source == "published":
+        percent = {"s2": published_utilisation("s2"), "s3": published_utilisation("s3")}
+        s2, s3 = published_tables(d.coverage, d.max_active)
+    else:
+        log(f"training run: conventional controller over the {model.scenario.duration_s:g} s scenario")
+        s2, s3, counts = derived_tables(model, progress=lambda f: log(f"  training {f:5.0%}"))
+        percent = {k: utilisation_percent(v) for k, v in counts.items()}
+    for kind, table in (("s2", s2), ("s3", s3)):
+        for c, row in enumerate(table):
+            for sec, cell in enumerate(row):
+                rows.append({"table": f"{kind}_switch_table", "source": source, "condition": c + 1,
+                             "sector": sec + 1, "candidates": " ".join(f"V{v}" for v in cell)})
+                for v in range(7):
+                    rows.append({"table": f"{kind}_utilisation", "source": source, "condition": c + 1,
+                                 "sector": sec + 1, "vector": f"V{v}", "percent": float(percent[kind][c, sec, v])})
+    return rows
