@@ -224,7 +224,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--traces", metavar="FILE",
                    help="write every run's time series (npz; CSV if FILE ends in .csv), one column per signal")
     s.add_argument("--sweep-eps", metavar="START:STOP:STEP",
-                   help="threshold sweep of seed-001 Table 1/2 with strategy s1 (e.g. 0.1:1.5:0.1)")
+                   help="threshold sweep of the MPTC paper's Tables 1-2 with strategy s1 (e.g. 0.1:1.5:0.1)")
     s.set_defaults(func=cmd_simulate)
 
     t = sub.add_parser("tables", help="print derived switch tables and vector sets")

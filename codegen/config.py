@@ -248,7 +248,7 @@ SCHEMA: dict[str, Spec] = {
     "scenario.duration_s": _real(_oc(0, 100)),
     "scenario.speed_mode": _choice(get_args(SpeedMode)),
     "scenario.set": _choice(SCENARIO_SETS),
-    "scenario.window_s": _real(_oc(0, Ref("scenario.duration_s"))),
+    "scenario.window_s": _real(_oc(0, 100)),
     "scenario.speed_ref_rpm": Spec(
         STEPS, _cc(Ref(_RATED_RPM, -10.0, "-10*rated"), Ref(_RATED_RPM, 10.0, "10*rated"))
     ),

@@ -1,1 +1,13 @@
-"""Serial hardware-in-the-loop harness (the HIL protocol): planned in a later issue; nothing here yet."""
+"""Serial hardware-in-the-loop harness: run the generated controller on a board, prove on the wire
+that it computes what the Python reference computes, and how long it takes.
+
+Modules: ``schema`` (the protocol, defined once), ``crc32`` and ``framing``
+(COBS frames with CRC-32), ``messages`` (payloads), ``codecgen`` (the
+firmware's generated codec), ``link`` (pyserial), ``virtual`` (the host port
+as a protocol program on a pseudo-terminal), ``boards``, ``session``
+(handshake, pipelined replay, retries, resynchronisation, reset detection),
+``states``, ``replay`` (mode ``replay``), ``progress``, ``faults`` (a fault
+injector between harness and board, for tests), ``cli`` (``mpcgen hil``).
+
+hil imports codegen; codegen never imports hil (import-linter contract).
+"""

@@ -79,3 +79,30 @@ def assert_symbols_prefixed(src: Path, obj: Path, prefix: str) -> None:
     assert names, f"{src.name} defines no symbol"
     bad = [n for n in names if not n.startswith(prefix + "_")]
     assert not bad, bad
+
+
+# ---------------------------------------------------------------- serial HIL (tests/hil)
+def pytest_addoption(parser: pytest.Parser) -> None:
+    parser.addoption("--hil-port", default=None, metavar="URL",
+                     help="serial URL of a real board for the HIL tests (default: the virtual board); the board "
+                          "must be flashed from the config each test names")
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    config.addinivalue_line("markers", "board: needs a board speaking the serial HIL protocol "
+                                       "(the virtual board unless --hil-port URL)")
+
+
+@pytest.fixture
+def board(request: pytest.FixtureRequest):
+    """``board(model, tables)``: a context manager giving a link to a board running ``model``'s
+    controller: the virtual board (built and started by the harness) unless ``--hil-port URL``."""
+    from hil.boards import open_board
+
+    port = request.config.getoption("--hil-port")
+
+    def opener(model: Model, tables: object, **kw: object):
+        return open_board(model, tables, port, **kw)  # type: ignore[arg-type]
+
+    opener.port = port  # type: ignore[attr-defined]
+    return opener

@@ -9,6 +9,11 @@
     firmware/runtime/...             the shared hand-written runtime
     firmware/ports/<board>/...       the board port (+ ports/cortex-m7 for Arm)
 
+A serial protocol build (``protocol=``, written by the ``hil`` package, which
+renders the protocol codec: codegen never imports hil) adds the protocol's
+runtime files, its generated files and ``-DMPC_HIL``: the image then serves
+the HIL protocol instead of running the self-test.
+
 ``build_firmware`` runs ``make`` there and returns the image's size and stack
 figures.  Sources come from ``codegen.resources`` so the installed package
 works outside a checkout.
@@ -39,8 +44,18 @@ ARM_CFLAGS = ("-mcpu=cortex-m7", "-mthumb", "-mfpu=fpv5-d16", "-mfloat-abi=hard"
               "-ffp-contract=off", "-fno-math-errno", "-std=c99", "-Wall", "-Wextra", "-Wconversion",
               "-Wdouble-promotion", "-Werror", "-fstack-usage", "-fcallgraph-info=su",
               "-ffunction-sections", "-fdata-sections", "-g")
+#: runtime files of the serial protocol (serial protocol builds only)
+PROTOCOL_RUNTIME_FILES = ("hil_proto.c", "hil_proto.h", "hil_cobs.c", "hil_cobs.h", "hil_wire.c", "hil_wire.h")
 HOST_CFLAGS = ("-O2", "-ffp-contract=off", "-fno-math-errno", "-std=c99", "-Wall", "-Wextra",
                "-Wconversion", "-Wdouble-promotion", "-Werror", "-fstack-usage", "-g")
+
+
+@dataclass(frozen=True)
+class ProtocolBuild:
+    """A serial protocol build: its generated files (project-relative path -> text) and C define."""
+
+    files: dict[str, str]
+    define: str = "MPC_HIL"
 
 
 def full_record(inp: RecordLayout, out: RecordLayout) -> int:
@@ -190,9 +205,12 @@ def _fit_budget(board: Board, sets: list[TestSet]) -> None:
         s.full = False
 
 
-def _sources(board: Board, outdir: Path, prefix: str) -> list[str]:
+def _sources(board: Board, outdir: Path, prefix: str, protocol: ProtocolBuild | None = None) -> list[str]:
     srcs = [f"gen/{prefix}_mpc.c", "gen/mpc_values.c", "gen/mpc_selftest_data.c"]
     srcs += [f"firmware/runtime/{f}" for f in RUNTIME_FILES if f.endswith(".c")]
+    if protocol is not None:
+        srcs += sorted(f for f in protocol.files if f.endswith(".c"))
+        srcs += [f"firmware/runtime/{f}" for f in PROTOCOL_RUNTIME_FILES if f.endswith(".c")]
     for d in board.port_dirs:
         srcs += sorted(str(p.relative_to(outdir)) for p in (outdir / "firmware/ports" / d).glob("*.c"))
     return srcs
@@ -200,7 +218,7 @@ def _sources(board: Board, outdir: Path, prefix: str) -> list[str]:
 
 def write_firmware_project(model: Model, tables: Any, board: str, outdir: Path,
                            n_selftest: int = 10000, *, n_bench: int = 2000,
-                           seed: int = SELFTEST_SEED) -> list[Path]:
+                           seed: int = SELFTEST_SEED, protocol: ProtocolBuild | None = None) -> list[Path]:
     """Write a buildable firmware project for ``board`` into ``outdir``; return the files written.
 
     The controller is rendered with the board's target profile, the
@@ -209,7 +227,8 @@ def write_firmware_project(model: Model, tables: Any, board: str, outdir: Path,
     fit the board), and a Makefile (C2000: Makefile + build.sh) is written.
     Either topology: ``model.inverter.topology`` picks the controller, the
     records, the reference and the test states (``codegen.fwdata.Topology``);
-    ``tables`` are TwoLevelTables or ThreeLevelTables to match.
+    ``tables`` are TwoLevelTables or ThreeLevelTables to match.  ``protocol``:
+    a serial protocol build (see the module docstring).
     """
     spec = board_spec(board)
     topo = topology_of(model)
@@ -220,8 +239,10 @@ def write_firmware_project(model: Model, tables: Any, board: str, outdir: Path,
     _fit_budget(spec, sets)
     fw = firmware_dir()
     files: dict[str, str] = {f"gen/{k}": v for k, v in topo.render(model, tables, spec.profile).items()}
-    for f in RUNTIME_FILES:
+    for f in RUNTIME_FILES + (PROTOCOL_RUNTIME_FILES if protocol is not None else ()):
         files[f"firmware/runtime/{f}"] = (fw / "runtime" / f).read_text()
+    if protocol is not None:
+        files.update(protocol.files)
     for d in spec.port_dirs:
         for p in sorted((fw / "ports" / d).iterdir()):
             if p.is_file():
@@ -241,7 +262,8 @@ def write_firmware_project(model: Model, tables: Any, board: str, outdir: Path,
     files["gen/mpc_values.c"] = env.get_template("firmware/values.c.j2").render(ctx)
     files["gen/mpc_selftest_data.c"] = env.get_template("firmware/selftest_data.c.j2").render(ctx)
     written = write_tree(files, outdir)
-    mk = {"board": spec, "sources": _sources(spec, outdir, model.prefix), "arm_cflags": ARM_CFLAGS,
+    mk = {"board": spec, "sources": _sources(spec, outdir, model.prefix, protocol), "arm_cflags": ARM_CFLAGS,
+          "defines": [protocol.define] if protocol is not None else [],
           "host_cflags": HOST_CFLAGS, "includes": ["gen", "firmware/runtime",
                                                    *[f"firmware/ports/{d}" for d in spec.port_dirs]],
           "model_name": model.name, "config_hash": model.config_hash(), "version": __version__}

@@ -2,8 +2,24 @@
  * main.c -- the firmware's work, the same on every board: HELLO, the port's
  * report, the cycle-measurement overhead, every embedded test set, RESULT,
  * exit code (0: every state of every set bit-identical to the reference).
+ * Serial protocol builds (MPC_HIL defined) serve the HIL protocol instead
+ * (hil_proto.h).
  */
 #include <stdint.h>
+
+#if defined(MPC_HIL)
+
+#include "hil_proto.h"
+#include "port.h"
+
+int main(void)
+{
+    port_init();
+    hil_serve();
+    return 0;
+}
+
+#else
 
 #include "console.h"
 #include "mpc_runtime.h"
@@ -55,3 +71,5 @@ int main(void)
     port_exit((uint16_t)((failures == 0u) ? 0u : 1u));
     return 0;
 }
+
+#endif /* MPC_HIL */

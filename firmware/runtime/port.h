@@ -32,4 +32,10 @@ void port_report(void);
 /* Stop: report `code` (0 = pass) to whatever runs the board, then never return. */
 void port_exit(uint16_t code);
 
+/* Serial protocol builds only (MPC_HIL, runtime/hil_proto.h): copy up to `max`
+ * received octets that are already waiting into `octets` (one octet per word,
+ * low 8 bits) and return how many; 0 when nothing is waiting.  Polled: it does
+ * not wait for input (the host port may sleep a few ms instead of spinning). */
+uint16_t port_read(uint16_t *octets, uint16_t max);
+
 #endif /* MPC_PORT_H */

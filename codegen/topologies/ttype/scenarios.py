@@ -150,7 +150,7 @@ def run_three_level(model: Model, strategies: list[str], plots: Path | None = No
     sc = model.scenario
     if sc.set == "mpdtc-table5":
         text = (f"{model.name}: steady state at 300/1800/3000 r/min, T* = {model.motor.rated_torque_nm:g} N*m, "
-                f"{sc.duration_s:g} s each, and the rated load step (seed 000 Table 5 layout; jump = largest "
+                f"{sc.duration_s:g} s each, and the rated load step (MPDTC paper Table 5 layout; jump = largest "
                 "line-voltage jump in Udc/2; RMSE, f_ave, Cal over the whole run, THD over the last "
                 f"{sc.window_s:g} s window, its steady state checked)\n" + table5(results, strategies))
     else:

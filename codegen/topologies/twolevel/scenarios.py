@@ -91,7 +91,7 @@ def run_scenarios(model: Model, strategies: list[str], plots: Path | None = None
         if writer is not None:
             writer.close()
     text = (f"{model.name}: {model.scenario.duration_s:g} s scenario, dt {model.controller.dt_s * 1e6:g} us "
-            f"(seed 001 Table 9 layout; RMSE, f_ave, Cal_ave over the whole run, THD over the last "
+            f"(MPTC paper Table 9 layout; RMSE, f_ave, Cal_ave over the whole run, THD over the last "
             f"{model.scenario.window_s:g} s window with nonzero speed, its steady state checked)\n"
             + table9(results))
     return _clean({

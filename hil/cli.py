@@ -1,0 +1,129 @@
+"""``mpcgen`` with the ``hil`` command: codegen's command line plus the serial HIL harness.
+
+codegen must never import hil, so the command is added from this side:
+:func:`build_parser` extends ``codegen.cli.build_parser()`` and the ``mpcgen``
+console script points at :func:`main`.  Every other command is codegen's,
+unchanged.
+
+    mpcgen hil CONFIG [--port URL | --board virtual] --mode replay --states N --json FILE
+
+Exit codes as codegen.cli: 0 every state answered and equal, 1 mismatches,
+lost states or a board error, 2 bad input (one line, checked before any long
+run).
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+
+from codegen import cli as base
+from codegen import cliargs
+from codegen.errors import ConfigError, MpcgenError, UsageError
+
+__all__ = ["build_parser", "main", "cmd_hil"]
+
+MODES = ("replay",)
+
+
+def cmd_hil(args: argparse.Namespace) -> int:
+    """Run the harness against one board."""
+    import serial
+
+    from codegen.topology import topology_of
+
+    from .boards import VIRTUAL, open_board
+    from .replay import replay
+    from .schema import Schema
+    from .session import Session
+    from .states import replay_states
+
+    if args.port is not None and args.board is not None:
+        raise UsageError("--port and --board exclude each other: --port URL for a board on a serial port, "
+                         f"--board {VIRTUAL} for the virtual board")
+    if args.board not in (None, VIRTUAL):
+        raise UsageError(f"--board = {args.board!r}: the only board started by the harness is {VIRTUAL!r}; "
+                         f"use --port URL for a board on a serial port")
+    cliargs.at_least("--states", args.states, 1)
+    cliargs.at_least("--retries", args.retries, 0)
+    cliargs.at_least("--batch", args.batch, 1)
+    if not args.timeout > 0:
+        raise UsageError(f"--timeout = {args.timeout}: must be a number of seconds > 0")
+    cliargs.output_file("--json", args.json)
+    model = base._load(args)
+    schema = Schema.of(model)
+    try:
+        schema.max_batch  # noqa: B018 -- the records must fit a frame
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    log = base._log(args.quiet)
+    if args.port is not None:
+        try:
+            open_board(model, None, args.port).__enter__().close()
+        except (serial.SerialException, OSError, ValueError) as exc:
+            raise UsageError(f"--port = {args.port!r}: cannot open it ({exc})") from None
+    tables = topology_of(model).derive(model)
+    sets = replay_states(model, tables, args.states, args.seed)
+    try:
+        with open_board(model, tables, args.port) as link:
+            session = Session(link, schema, timeout_s=args.timeout, retries=args.retries, batch=args.batch)
+            info = session.handshake()
+            log(f"board {info.target}: config {info.config_hash}, schema {info.schema_hash}, clock "
+                f"{info.core_clock_hz} Hz, cycles in {info.cycle_unit}, max batch {info.max_batch}")
+            data = replay(session, model, tables, sets, show_progress=not args.quiet, log=log)
+    except serial.SerialException as exc:
+        raise MpcgenError(f"serial link failed: {exc}") from None
+    print(f"{data['states']} states  mismatches {data['mismatches']}  lost {data['lost']}  "
+          f"{data['states_per_s']:,.0f} states/s  {data['octets_per_s']:,.0f} octets/s "
+          f"(921600-baud UART: {data['uart_921600_octets_per_s']:,} octets/s)  {data['cycle_unit']} "
+          f"min/median/p99/max {data['cycles_min']}/{data['cycles_median']}/{data['cycles_p99']}/{data['cycles_max']}")
+    base._write_json(args.json, data)
+    return base.EXIT_OK if data["mismatches"] == 0 and data["lost"] == 0 else base.EXIT_FAIL
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """codegen's parser with the ``hil`` command added."""
+    p = base.build_parser()
+    sub = next(a for a in p._actions if isinstance(a, argparse._SubParsersAction))
+    h = sub.add_parser("hil", help="run the controller on a board over a serial port, bit for bit against "
+                                   "the reference")
+    base._add_config_args(h)
+    where = h.add_mutually_exclusive_group()
+    where.add_argument("--port", help="serial URL of the board: a device (/dev/ttyACM0), a pseudo-terminal or "
+                                      "socket://HOST:PORT")
+    where.add_argument("--board", help="virtual: the host port built with the protocol, started by the harness "
+                                       "(the default)")
+    h.add_argument("--mode", choices=MODES, default="replay",
+                   help="replay: recorded closed-loop, random and adversarial states compared bit for bit")
+    h.add_argument("--states", type=int, default=2000, help="states of each source (default 2000)")
+    h.add_argument("--seed", type=int, default=1, help="seed of the random states (default 1)")
+    h.add_argument("--timeout", type=float, default=0.5, help="seconds before an unanswered frame is sent again")
+    h.add_argument("--retries", type=int, default=3, help="times a state is sent again before it counts as lost")
+    h.add_argument("--batch", type=int, default=16, help="states per BATCH frame (at most the board's max batch)")
+    h.add_argument("--json", help="write the summary as JSON")
+    h.set_defaults(func=cmd_hil)
+    return p
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``mpcgen``: every codegen command, and ``hil``."""
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # argparse: 2 on bad usage, 0 on --help
+        return int(exc.code or 0)
+    try:
+        return int(args.func(args))
+    except (ConfigError, UsageError) as exc:
+        base._err(str(exc))
+        return base.EXIT_BAD_INPUT
+    except MpcgenError as exc:
+        base._err(str(exc))
+        return base.EXIT_FAIL
+    except KeyboardInterrupt:
+        base._err("interrupted")
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())
