@@ -9,8 +9,13 @@ Topology-agnostic: everything topology-specific comes from the plugin.
 """
 from __future__ import annotations
 
+import contextlib
+import functools
+import multiprocessing
+import os
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
@@ -21,6 +26,8 @@ from codegen.stages.fwdata import evenly_spaced
 from codegen.topology import topology_of
 
 CHUNK = 250_000
+#: fewer states than this are compared in this process (a pool costs more than it saves)
+PARALLEL_MIN_STATES = 50_000
 #: seed of the random states
 RANDOM_SEED = 11
 
@@ -66,34 +73,51 @@ def verify_strategy(
     parts["adversarial"] = topo.adversarial_states(model, tables, max(n_adv, 1000))[:n_adv]
     n_random = max(n_states - sum(len(p) for p in parts.values()), 0)
     parts["random"] = topo.random_states(model, n_random, RANDOM_SEED)
-    return compare_batches(model.controller.strategy, parts, lambda x: topo.step_batch(tables, x),
+    return compare_batches(model.controller.strategy, parts, functools.partial(topo.step_batch, tables),
                            lib.step_batch, log, t0)
+
+
+def workers() -> int:
+    """Processes the reference runs in: every core (``MPCGEN_JOBS`` overrides)."""
+    return max(1, int(os.environ.get("MPCGEN_JOBS") or os.cpu_count() or 1))
 
 
 def compare_batches(strategy: str, parts: dict[str, np.ndarray], ref_step: Callable[[np.ndarray], np.ndarray],
                     c_step: Callable[[np.ndarray], np.ndarray], log: Callable[[str], None], t0: float) -> StrategyResult:
-    """Run both implementations over every state (in chunks) and compare bits."""
+    """Run both implementations over every state (in chunks) and compare bits.
+
+    The Python reference, the slow side, runs in a process pool on every core
+    (``ref_step`` must be picklable: a module function, or a partial of one);
+    the compiled C and the comparison run here, chunk by chunk, in order.
+    """
     states = np.concatenate(list(parts.values()))
     total = len(states)
+    n_jobs = workers() if total >= PARALLEL_MIN_STATES else 1
+    size = CHUNK if n_jobs == 1 else min(CHUNK, max(10_000, -(-total // (4 * n_jobs))))
+    bounds = [(lo, min(lo + size, total)) for lo in range(0, total, size)]
     mismatches = 0
     per_field: dict[str, int] = {}
     first = ""
     faulted = 0
-    for lo in range(0, total, CHUNK):
-        x = states[lo : lo + CHUNK]
-        ref = ref_step(x)
-        got = c_step(x)
-        bad, pf = mismatch_mask(ref, got)
-        faulted += int((ref["fault"] != 0).sum())
-        for k, v in pf.items():
-            per_field[k] = per_field.get(k, 0) + v
-        nb = int(bad.sum())
-        if nb and not first:
-            i = int(np.flatnonzero(bad)[0])
-            first = f"state #{lo + i}:\n" + describe_mismatch(x[i], ref[i], got[i])
-        mismatches += nb
-        done = min(lo + CHUNK, total)
-        log(f"  {strategy:12s} {done:>9d}/{total} states, {mismatches} mismatches")
+    with contextlib.ExitStack() as stack:
+        if n_jobs > 1:
+            pool = stack.enter_context(ProcessPoolExecutor(n_jobs, mp_context=multiprocessing.get_context("fork")))
+            refs: Iterator[np.ndarray] = (f.result() for f in [pool.submit(ref_step, states[a:b]) for a, b in bounds])
+        else:
+            refs = (ref_step(states[a:b]) for a, b in bounds)
+        for (lo, hi), ref in zip(bounds, refs):
+            x = states[lo:hi]
+            got = c_step(x)
+            bad, pf = mismatch_mask(ref, got)
+            faulted += int((ref["fault"] != 0).sum())
+            for k, v in pf.items():
+                per_field[k] = per_field.get(k, 0) + v
+            nb = int(bad.sum())
+            if nb and not first:
+                i = int(np.flatnonzero(bad)[0])
+                first = f"state #{lo + i}:\n" + describe_mismatch(x[i], ref[i], got[i])
+            mismatches += nb
+            log(f"  {strategy:12s} {hi:>9d}/{total} states, {mismatches} mismatches")
     wall = time.perf_counter() - t0
     return StrategyResult(
         strategy=strategy,

@@ -79,3 +79,31 @@ def test_verify_detects_a_one_ulp_change(monkeypatch):
     x = np.concatenate([random_states(m, 50_000), adversarial_states(m, t, reference.step_batch, 10_000)])
     bad, per_field = mismatch_mask(reference.step_batch(t, x), lib.step_batch(x))
     assert bad.sum() > 0 and "costs" in per_field
+
+
+def test_parallel_reference_reports_what_the_serial_one_does(monkeypatch):
+    """The reference in a process pool: the same counts, the same first mismatch, in state order."""
+    import functools
+    import time
+
+    from codegen.stages import verify as verify_stage
+
+    m = model_for(SPMSM, strategy="s1")
+    t = tables_for(m)
+    x = random_states(m, 120_000, seed=9)
+
+    marked = x["theta_e_rad"][[0, 50_001, 100_002]]  # three states, found by content in any chunk
+
+    def wrong_c(x: np.ndarray) -> np.ndarray:
+        out = reference.step_batch(t, x)
+        out["cost_best"][np.isin(x["theta_e_rad"], marked)] += np.float32(1.0)
+        return out
+
+    ref = functools.partial(reference.step_batch, t)
+    results = []
+    for jobs in ("1", "2"):
+        monkeypatch.setenv("MPCGEN_JOBS", jobs)
+        r = verify_stage.compare_batches("s1", {"random": x}, ref, wrong_c, lambda _m: None, time.perf_counter())
+        results.append((r.states, r.mismatches, r.faulted_states, r.mismatches_per_field, r.first_mismatch))
+    assert results[0] == results[1]
+    assert results[0][1] == 3 and results[0][4].startswith("state #0:")
