@@ -189,18 +189,25 @@ def _step(t: ThreeLevelTables, x: np.ndarray) -> np.ndarray:
         m_tn = o.zeros(n)
         for mi in range(t.max_members):
             m_act = mi < gn
+            if not m_act.any():  # no lane's group has this many members (27-MPDTC: most groups)
+                continue
             v = groups[g, mi]
-            o_n, sa, d = mid.parts(seq[v], ia1, ib1, ic1)
-            # neutral-point deadbeat T_N = -(2C V_o(k+1) + Ts/3 A)/D, clamped to [T_N_min, Ts/3]
-            num = o.mul(vo1, k.TWO_C)
-            num = o.add(num, o.mul(k.TS3_S, sa))
-            num = o.neg(num)
-            tn = o.where(o.ne(d, zf), o.div(num, d), k.TN_MIN_S)
-            tn = o.where(o.lt(tn, k.TN_MIN_S), k.TN_MIN_S, tn)
-            tn = o.where(o.gt(tn, k.TS3_S), k.TS3_S, tn)
             virt = is_virt[v]
-            q = mid.charge(virt, o_n, sa, d, tn)
-            tn = o.where(virt, tn, zf)
+            if virt.any():
+                o_n, sa, d = mid.parts(seq[v], ia1, ib1, ic1)
+                # neutral-point deadbeat T_N = -(2C V_o(k+1) + Ts/3 A)/D, clamped to [T_N_min, Ts/3]
+                num = o.mul(vo1, k.TWO_C)
+                num = o.add(num, o.mul(k.TS3_S, sa))
+                num = o.neg(num)
+                tn = o.where(o.ne(d, zf), o.div(num, d), k.TN_MIN_S)
+                tn = o.where(o.lt(tn, k.TN_MIN_S), k.TN_MIN_S, tn)
+                tn = o.where(o.gt(tn, k.TS3_S), k.TS3_S, tn)
+                q = mid.charge(virt, o_n, sa, d, tn)
+                tn = o.where(virt, tn, zf)
+            else:  # basic members only (27-MPDTC): the charge Ts i_o(s) of mid.charge, T_N = 0
+                o_n = mid.io(seq[v][:, 0], ia1, ib1, ic1)
+                q = o.mul(k.TS_S, o_n)
+                tn = o.zeros(n)
             vo2 = o.add(vo1, o.mul(k.K_VO, q))
             av = o.abs(vo2)
             take = m_act & ((mi == 0) | o.lt(av, m_av))
