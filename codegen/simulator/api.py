@@ -60,6 +60,27 @@ class SimApi:
         return (*SHARED_SOURCES, self.csrc / f"{self.topology}_plant.c", self.loop_source)
 
 
+def hil_declarations(api: SimApi) -> str:
+    """Declarations of the period-by-period entry points (``<topology>_sim.c``), appended to ``sim_api.h``.
+
+    ``<api>_hil_input`` writes the controller input record (``mpc_input_t``)
+    of period ``state->common.k``, changing nothing; ``<api>_hil_finish``
+    takes that period's decision (``mpc_output_t``), records trace entry ``j``
+    (``trace`` may be NULL), integrates the plant and commits the period
+    (return codes as ``<api>_run``).  The same code as ``<api>_run``: a run
+    through them with the compiled step's decisions equals ``<api>_run`` bit
+    for bit.  ``void *``: the records are the generated binding's types.
+    """
+    a, p, s, t = api.prefix, api.params.ctype, api.state.ctype, api.trace.ctype
+    pad = " " * (len(a) + 17)
+    return (f"\n/* The closed loop period by period (the serial HIL's closed-loop mode): {a}_hil_input\n"
+            f" * writes the input record of period state->common.k, {a}_hil_finish applies its decision. */\n"
+            f"int {a}_hil_input(const {p} *p, const {s} *state, double speed_ref_rad_s,\n"
+            f"{pad}double load_nm, void *in);\n"
+            f"int {a}_hil_finish(const {p} *p, {s} *state, double speed_ref_rad_s,\n"
+            f"{pad} double load_nm, const void *out, const {t} *trace, long j);\n")
+
+
 def render_header(api: SimApi) -> str:
     """The text of ``sim_api.h`` (cdef-ready: no preprocessor lines)."""
     from codegen.render import environment
@@ -69,7 +90,7 @@ def render_header(api: SimApi) -> str:
         loop_source=f"codegen/topologies/{api.topology}/csrc/{api.loop_source.name}",
         motor_state=MOTOR_STATE, params_common=SIM_PARAMS, state_common=SIM_STATE,
         trace_common=SIM_TRACE, params=api.params, state=api.state, trace=api.trace,
-    )
+    ) + hil_declarations(api)
 
 
 def header_path(api: SimApi) -> Path:

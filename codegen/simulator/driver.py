@@ -253,3 +253,78 @@ def run_chunked(
         arr.flags.writeable = False
     speed_ref.flags.writeable = False
     return arrays
+
+
+class PeriodStepper:
+    """The closed loop of ``run_chunked``, one period at a time, with the decision given from outside.
+
+    For a controller computed elsewhere (the serial HIL's closed loop, where a
+    board computes each decision): :meth:`input` is the controller-input
+    record of the next period (``in_dtype``, exactly what ``<api>_run`` would
+    give the step), :meth:`finish` takes that period's output record
+    (``out_dtype``), records the trace entry, integrates the plant and
+    commits the period.  The C code is the same as ``<api>_run``'s
+    (``<api>_hil_input`` / ``<api>_hil_finish``), so decisions equal to the
+    compiled step's give the simulator's trace bit for bit.
+    """
+
+    def __init__(self, ffi: Any, lib: Any, api: SimApi, model: Model, params: Any, in_dtype: np.dtype,
+                 out_dtype: np.dtype, initial_speed_rad_s: float = 0.0) -> None:
+        self.ffi, self.lib, self.api, self.model, self.params = ffi, lib, api, model, params
+        self.in_dtype, self.out_dtype = np.dtype(in_dtype), np.dtype(out_dtype)
+        self.speed_ref, self.load = scenario_arrays(model)
+        self.n = int(self.speed_ref.shape[0])
+        self.fields = trace_fields(api.trace)
+        self.state = ffi.new(f"{api.state.ctype} *")
+        self.where = f"{model.source or model.name}"
+        if getattr(lib, f"{api.prefix}_init")(params, self.state) != 0:
+            raise SimulationError(f"{self.where}: {api.errors[-1]}")
+        self.state.common.motor.omega_m_rad_s = float(initial_speed_rad_s)
+        self._input = getattr(lib, f"{api.prefix}_hil_input")
+        self._finish = getattr(lib, f"{api.prefix}_hil_finish")
+        self.arrays: dict[str, np.ndarray] = {k: np.zeros(self.n * w, dtype=t) for k, (t, w) in self.fields.items()}
+        self._keep = []
+        self.trace_c = ffi.new(f"{api.trace.ctype} *")
+        for name, arr in self.arrays.items():
+            buf = ffi.from_buffer(arr, require_writable=True)
+            self._keep.append(buf)
+            holder = self.trace_c if api.trace.owner(name) is api.trace else self.trace_c.common
+            setattr(holder, name, ffi.cast(_c_pointer(api.trace, name), buf))
+        self._in = np.zeros(1, self.in_dtype)
+        self._out = np.zeros(1, self.out_dtype)
+        self._in_buf = ffi.from_buffer(self._in, require_writable=True)
+        self._out_buf = ffi.from_buffer(self._out, require_writable=True)
+        self.k = 0
+
+    def input(self) -> np.ndarray:
+        """The controller input of period ``k`` (a length-1 record array, valid until the next call)."""
+        k = self.k
+        if k >= self.n:
+            raise IndexError(f"the scenario has {self.n} periods")
+        if self._input(self.params, self.state, float(self.speed_ref[k]), float(self.load[k]), self._in_buf) != 0:
+            raise SimulationError(f"{self.where}: {self.api.errors[-1]}")
+        return self._in
+
+    def finish(self, out: np.ndarray) -> None:
+        """Apply period ``k``'s decision ``out`` (one output record) and commit the period."""
+        k = self.k
+        self._out[0] = out.reshape(-1)[0]
+        rc = self._finish(self.params, self.state, float(self.speed_ref[k]), float(self.load[k]), self._out_buf,
+                          self.trace_c, k)
+        if rc != 0:
+            reason = self.api.errors.get(rc, f"simulator error {rc}")
+            raise SimulationError(f"{self.where}: closed-loop run stopped at period {k} "
+                                  f"(t = {k * self.model.controller.dt_s:.6g} s): {reason}")
+        self.k = k + 1
+
+    def result(self, periods: int | None = None) -> dict[str, np.ndarray]:
+        """The trace arrays of the first ``periods`` (default: the periods done), as ``run_chunked`` returns them."""
+        m = self.k if periods is None else min(periods, self.k)
+        out: dict[str, np.ndarray] = {}
+        for name, (_, w) in self.fields.items():
+            a = self.arrays[name][:m * w].copy()
+            out[name] = a.reshape(m, w) if w > 1 else a
+        out["load_nm"] = self.load[:m].copy()
+        for arr in out.values():
+            arr.flags.writeable = False
+        return out

@@ -35,6 +35,7 @@ from codegen.simulator import api
 from codegen.simulator.driver import (
     DEFAULT_CHUNK,
     MAX_SUBSTEP_S,
+    PeriodStepper,
     TraceBase,
     fill_common_params,
     motor_inputs,
@@ -165,3 +166,27 @@ def controller_inputs(trace: Any, model: Model) -> np.ndarray:
     rec["t_n_prev_s"] = t_n_prev
     return rec
 
+
+#: the trace field holding the controller's decision (the vector it asks for)
+DECISION_FIELD = "vector"
+
+
+def period_stepper(lib: Any, model: Model, *, substep_max_s: float | None = None,
+                   initial_speed_rpm: float = 0.0) -> PeriodStepper:
+    """The closed loop of :func:`run_closed_loop` one period at a time, the decision given from outside
+    (``lib``: a :class:`~codegen.hostbuild.HostLib` built with the simulator)."""
+    return PeriodStepper(lib.ffi, lib.lib, SIM, model, params_from_model(lib.ffi, model, substep_max_s),
+                         lib.records.input.dtype, lib.records.output.dtype,
+                         initial_speed_rad_s=initial_speed_rpm * 2.0 * math.pi / 60.0)
+
+
+def trace_from(arrays: dict[str, np.ndarray], model: Model) -> Any:
+    """The :class:`Trace` of arrays from :meth:`PeriodStepper.result`."""
+    return Trace(dt_s=float(model.controller.dt_s), udc_v=float(model.inverter.udc_v), **arrays)
+
+
+def trace_metrics(trace: Any, model: Model) -> dict[str, Any]:
+    """The metrics ``mpcgen simulate`` reports for a run of this topology."""
+    from codegen.topologies.ttype.metrics import three_level_metrics
+
+    return three_level_metrics(trace, model)

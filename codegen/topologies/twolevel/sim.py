@@ -30,6 +30,7 @@ from codegen.records import Record, fields
 from codegen.simulator import api
 from codegen.simulator.driver import (
     DEFAULT_CHUNK,
+    PeriodStepper,
     TraceBase,
     default_substeps,
     fill_common_params,
@@ -120,3 +121,26 @@ def controller_inputs(trace: Any, model: Model) -> np.ndarray:
     prev_sw[1:] = trace.sw[:-1]
     rec["prev_sw"] = prev_sw
     return rec
+
+
+#: the trace field holding the controller's decision (the inverter state it asks for)
+DECISION_FIELD = "sw"
+
+
+def period_stepper(lib: Any, model: Model, *, substeps: int | None = None) -> PeriodStepper:
+    """The closed loop of :func:`run_closed_loop` one period at a time, the decision given from outside
+    (``lib``: a :class:`~codegen.hostbuild.HostLib` built with the simulator)."""
+    return PeriodStepper(lib.ffi, lib.lib, SIM, model, params_from_model(lib.ffi, model, substeps),
+                         lib.records.input.dtype, lib.records.output.dtype)
+
+
+def trace_from(arrays: dict[str, np.ndarray], model: Model) -> Any:
+    """The :class:`Trace` of arrays from :meth:`PeriodStepper.result`."""
+    return Trace(dt_s=float(model.controller.dt_s), **arrays)
+
+
+def trace_metrics(trace: Any, model: Model) -> dict[str, Any]:
+    """The metrics ``mpcgen simulate`` reports for a run of this topology."""
+    from codegen.topologies.twolevel.metrics import two_level_metrics
+
+    return two_level_metrics(trace, model)

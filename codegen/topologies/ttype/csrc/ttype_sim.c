@@ -38,6 +38,11 @@
  * 2), including the boundary from the last non-empty segment of the
  * previous period (OOO before period 0).
  *
+ * Period by period (the serial HIL's closed loop, where a board computes the
+ * decision): ttype_sim_hil_input gives the controller input of the next
+ * period, ttype_sim_hil_finish takes the decision and does steps 5.-7.; the
+ * same code as ttype_sim_run, so the two agree bit for bit.
+ *
  * mpc_binding.h is generated per config and provides mpc_input_t,
  * mpc_output_t and MPC_STEP(in_ptr, out_ptr).
  */
@@ -168,13 +173,86 @@ static unsigned applied_changes(const ttype_sim_state_t *state, int *last)
     return changes;
 }
 
+/* Steps 1.-4. (inputs) of the period at state->common.k; x: the plant (step 1 may set its speed). */
+static void period_input(const ttype_sim_params_t *p, const ttype_sim_state_t *state,
+                         ttype_plant_state_t *x, double w_ref, double load, sim_sample_t *v,
+                         mpc_input_t *in)
+{
+    /* 1.-3. */
+    sim_period_sample(&p->common, &state->common, &x->motor, w_ref, load, v);
+
+    /* 4. controller inputs, cast to float */
+    memset(in, 0, sizeof *in);
+    SIM_PERIOD_MOTOR_INPUTS(*in, *v);
+    in->uc1_v = (float)(0.5 * p->common.udc_v + x->vo_v);
+    in->uc2_v = (float)(0.5 * p->common.udc_v - x->vo_v);
+    in->prev_vector = (uint16_t)state->applied_vector;
+    in->t_n_prev_s = (float)state->applied_t_n_s;
+}
+
+/* Steps 5.-7. and the commit of period k (trace entry j) with the decision `out`. */
+static int period_finish(const ttype_sim_params_t *p, ttype_sim_state_t *state,
+                         ttype_plant_state_t *x, const sim_sample_t *v, const mpc_output_t *out,
+                         const ttype_sim_trace_t *tr, long j)
+{
+    double uab[7], next_seg[7];
+    uint16_t next_st[7];
+    unsigned changes;
+    int i, last, bad;
+
+    changes = applied_changes(state, &last);
+
+    /* 5. record the sample instant, the decision, the applied period */
+    sim_period_record(&tr->common, j, &p->common, &state->common, &x->motor, v, out->vector,
+                      out->n_eval, out->fault, out->te_est_nm, out->psi_est_wb);
+    if (tr->vo_v != NULL) tr->vo_v[j] = x->vo_v;
+    if (tr->t_n_s != NULL) tr->t_n_s[j] = out->t_n_s;
+    if (tr->psi_ref_wb != NULL) tr->psi_ref_wb[j] = out->psi_ref_wb;
+    if (tr->vo_est_v != NULL) tr->vo_est_v[j] = out->vo_v;
+    if (tr->applied_vector != NULL) tr->applied_vector[j] = (uint16_t)state->applied_vector;
+    if (tr->leg_changes != NULL) tr->leg_changes[j] = (uint16_t)changes;
+    for (i = 0; i < TTYPE_PLANT_N_SEG; ++i) {
+        if (tr->seg_s != NULL) tr->seg_s[7 * j + i] = state->applied_seg_s[i];
+        if (tr->seg_states != NULL) tr->seg_states[7 * j + i] = state->applied_states[i];
+    }
+
+    /* 6. check the decision */
+    bad = take_decision(p, out, next_st, next_seg);
+
+    /* 7. integrate the applied period over [t_k, t_k+1) */
+    (void)ttype_plant_advance_segments(x, p, state->applied_states, state->applied_seg_s, v->load,
+                                       uab);
+    if (tr->uab_v != NULL) {
+        for (i = 0; i < TTYPE_PLANT_N_SEG; ++i) {
+            tr->uab_v[7 * j + i] = uab[i];
+        }
+    }
+    if (bad != 0) {
+        return -3; /* *state still holds the sample instant of period k */
+    }
+    if (!(sim_period_finite(&x->motor) && isfinite(x->vo_v))) {
+        return -2;
+    }
+
+    /* commit period k */
+    state->last_state = last;
+    state->applied_vector = (int32_t)out->vector;
+    state->applied_t_n_s = (double)out->t_n_s;
+    for (i = 0; i < TTYPE_PLANT_N_SEG; ++i) {
+        state->applied_states[i] = next_st[i];
+        state->applied_seg_s[i] = next_seg[i];
+    }
+    state->vo_v = x->vo_v;
+    sim_period_commit(&state->common, &x->motor, v->integral);
+    return 0;
+}
+
 int ttype_sim_run(const ttype_sim_params_t *p, const double *speed_ref_rad_s, const double *load_nm,
                   long n, ttype_sim_trace_t *trace, ttype_sim_state_t *state)
 {
     ttype_plant_state_t x;
     ttype_sim_trace_t tr;
     long j;
-    int i;
 
     if (!params_valid(p) || state == NULL
         || !sim_period_args_valid(&state->common, n, speed_ref_rad_s, load_nm) || !state_valid(state)) {
@@ -192,68 +270,58 @@ int ttype_sim_run(const ttype_sim_params_t *p, const double *speed_ref_rad_s, co
         mpc_input_t in;
         mpc_output_t out;
         sim_sample_t v;
-        double uab[7], next_seg[7];
-        uint16_t next_st[7];
-        unsigned changes;
-        int last, bad;
+        int rc;
 
-        /* 1.-3. */
-        sim_period_sample(&p->common, &state->common, &x.motor, speed_ref_rad_s[j], load_nm[j], &v);
-
-        /* 4. controller step, inputs cast to float */
-        memset(&in, 0, sizeof in);
+        period_input(p, state, &x, speed_ref_rad_s[j], load_nm[j], &v, &in);
         memset(&out, 0, sizeof out);
-        SIM_PERIOD_MOTOR_INPUTS(in, v);
-        in.uc1_v = (float)(0.5 * p->common.udc_v + x.vo_v);
-        in.uc2_v = (float)(0.5 * p->common.udc_v - x.vo_v);
-        in.prev_vector = (uint16_t)state->applied_vector;
-        in.t_n_prev_s = (float)state->applied_t_n_s;
         MPC_STEP(&in, &out);
-
-        changes = applied_changes(state, &last);
-
-        /* 5. record the sample instant, the decision, the applied period */
-        sim_period_record(&tr.common, j, &p->common, &state->common, &x.motor, &v, out.vector,
-                          out.n_eval, out.fault, out.te_est_nm, out.psi_est_wb);
-        if (tr.vo_v != NULL) tr.vo_v[j] = x.vo_v;
-        if (tr.t_n_s != NULL) tr.t_n_s[j] = out.t_n_s;
-        if (tr.psi_ref_wb != NULL) tr.psi_ref_wb[j] = out.psi_ref_wb;
-        if (tr.vo_est_v != NULL) tr.vo_est_v[j] = out.vo_v;
-        if (tr.applied_vector != NULL) tr.applied_vector[j] = (uint16_t)state->applied_vector;
-        if (tr.leg_changes != NULL) tr.leg_changes[j] = (uint16_t)changes;
-        for (i = 0; i < TTYPE_PLANT_N_SEG; ++i) {
-            if (tr.seg_s != NULL) tr.seg_s[7 * j + i] = state->applied_seg_s[i];
-            if (tr.seg_states != NULL) tr.seg_states[7 * j + i] = state->applied_states[i];
+        rc = period_finish(p, state, &x, &v, &out, &tr, j);
+        if (rc != 0) {
+            return rc;
         }
-
-        /* 6. check the decision */
-        bad = take_decision(p, &out, next_st, next_seg);
-
-        /* 7. integrate the applied period over [t_k, t_k+1) */
-        (void)ttype_plant_advance_segments(&x, p, state->applied_states, state->applied_seg_s,
-                                           v.load, uab);
-        if (tr.uab_v != NULL) {
-            for (i = 0; i < TTYPE_PLANT_N_SEG; ++i) {
-                tr.uab_v[7 * j + i] = uab[i];
-            }
-        }
-        if (bad != 0) {
-            return -3; /* *state still holds the sample instant of period k */
-        }
-        if (!(sim_period_finite(&x.motor) && isfinite(x.vo_v))) {
-            return -2;
-        }
-
-        /* commit period k */
-        state->last_state = last;
-        state->applied_vector = (int32_t)out.vector;
-        state->applied_t_n_s = (double)out.t_n_s;
-        for (i = 0; i < TTYPE_PLANT_N_SEG; ++i) {
-            state->applied_states[i] = next_st[i];
-            state->applied_seg_s[i] = next_seg[i];
-        }
-        state->vo_v = x.vo_v;
-        sim_period_commit(&state->common, &x.motor, v.integral);
     }
     return 0;
+}
+
+static int hil_args_valid(const ttype_sim_params_t *p, const ttype_sim_state_t *state)
+{
+    return params_valid(p) && state != NULL && state->common.k >= 0 && state_valid(state);
+}
+
+int ttype_sim_hil_input(const ttype_sim_params_t *p, const ttype_sim_state_t *state,
+                        double speed_ref_rad_s, double load_nm, void *in)
+{
+    ttype_plant_state_t x;
+    sim_sample_t v;
+
+    if (!hil_args_valid(p, state) || in == NULL) {
+        return -1;
+    }
+    x.motor = state->common.motor;
+    x.vo_v = state->vo_v;
+    period_input(p, state, &x, speed_ref_rad_s, load_nm, &v, (mpc_input_t *)in);
+    return 0;
+}
+
+int ttype_sim_hil_finish(const ttype_sim_params_t *p, ttype_sim_state_t *state,
+                         double speed_ref_rad_s, double load_nm, const void *out,
+                         const ttype_sim_trace_t *trace, long j)
+{
+    ttype_sim_trace_t tr;
+    ttype_plant_state_t x;
+    mpc_input_t in;
+    sim_sample_t v;
+
+    if (!hil_args_valid(p, state) || out == NULL || j < 0) {
+        return -1;
+    }
+    if (trace != NULL) {
+        tr = *trace;
+    } else {
+        memset(&tr, 0, sizeof tr);
+    }
+    x.motor = state->common.motor;
+    x.vo_v = state->vo_v;
+    period_input(p, state, &x, speed_ref_rad_s, load_nm, &v, &in);
+    return period_finish(p, state, &x, &v, (const mpc_output_t *)out, &tr, j);
 }

@@ -26,6 +26,11 @@
  *     load torque load_nm[k] (ignored when the speed is imposed).
  * Initial state: the shared one (sim_period_reset) and prev_sw 0 (000).
  *
+ * Period by period (the serial HIL's closed loop, where a board computes the
+ * decision): twolevel_sim_hil_input gives the controller input of the next
+ * period, twolevel_sim_hil_finish takes the decision and does steps 5.-7.;
+ * the same code as twolevel_sim_run, so the two agree bit for bit.
+ *
  * mpc_binding.h is generated per config and provides mpc_input_t,
  * mpc_output_t and the macro MPC_STEP(in_ptr, out_ptr).
  */
@@ -52,6 +57,57 @@ int twolevel_sim_init(const twolevel_sim_params_t *p, twolevel_sim_state_t *stat
     return 0;
 }
 
+/* Steps 1.-4. (inputs) of the period at state->common.k; x: the plant (step 1 may set its speed). */
+static void period_input(const twolevel_sim_params_t *p, const twolevel_sim_state_t *state,
+                         pmsm_state_t *x, double w_ref, double load, sim_sample_t *v,
+                         mpc_input_t *in)
+{
+    /* 1.-3. */
+    sim_period_sample(&p->common, &state->common, x, w_ref, load, v);
+
+    /* 4. controller inputs, cast to float as a real controller sees them */
+    memset(in, 0, sizeof *in);
+    SIM_PERIOD_MOTOR_INPUTS(*in, *v);
+    in->udc_v = (float)p->common.udc_v;
+    in->prev_sw = (uint16_t)state->prev_sw;
+}
+
+/* Steps 5.-7. and the commit of period k (trace entry j) with the decision `out`. */
+static int period_finish(const twolevel_sim_params_t *p, twolevel_sim_state_t *state,
+                         pmsm_state_t *x, const sim_sample_t *v, const mpc_output_t *out,
+                         const twolevel_sim_trace_t *tr, long j)
+{
+    const int sw_dec = (int)out->sw;
+    /* 6. timing rule (plant-and-metrics.md "Timing") */
+    const int sw_apply = p->delay_compensation ? state->prev_sw : sw_dec;
+
+    /* 5. record the sample instant */
+    sim_period_record(&tr->common, j, &p->common, &state->common, x, v, out->vector, out->n_eval,
+                      out->fault, out->te_est_nm, out->psi_est_wb);
+    if (tr->sw != NULL) tr->sw[j] = (uint16_t)out->sw;
+    if (tr->applied_sw != NULL) tr->applied_sw[j] = (uint16_t)(sw_apply & 0xFFFF);
+
+    if (sw_dec < 0 || sw_dec > 7) {
+        state->common.motor = *x;
+        return -3;
+    }
+
+    /* 7. integrate the plant over [t_k, t_k+1) */
+    (void)twolevel_plant_advance(x, &p->common, sw_apply, v->load, p->common.dt_s, p->substeps);
+    if (!sim_period_finite(x)) {
+        return -2; /* *state still holds the sample instant of period k */
+    }
+    state->prev_sw = sw_dec;
+    sim_period_commit(&state->common, x, v->integral);
+    return 0;
+}
+
+static int run_args_valid(const twolevel_sim_params_t *p, const twolevel_sim_state_t *state)
+{
+    return params_valid(p) && state != NULL && state->common.k >= 0 && state->prev_sw >= 0
+           && state->prev_sw <= 7;
+}
+
 int twolevel_sim_run(const twolevel_sim_params_t *p, const double *speed_ref_rad_s,
                      const double *load_nm, long n, twolevel_sim_trace_t *trace,
                      twolevel_sim_state_t *state)
@@ -76,41 +132,51 @@ int twolevel_sim_run(const twolevel_sim_params_t *p, const double *speed_ref_rad
         mpc_input_t in;
         mpc_output_t out;
         sim_sample_t v;
-        int sw_dec, sw_apply;
+        int rc;
 
-        /* 1.-3. */
-        sim_period_sample(&p->common, &state->common, &x, speed_ref_rad_s[j], load_nm[j], &v);
-
-        /* 4. controller step, inputs cast to float as a real controller sees them */
-        memset(&in, 0, sizeof in);
+        period_input(p, state, &x, speed_ref_rad_s[j], load_nm[j], &v, &in);
         memset(&out, 0, sizeof out);
-        SIM_PERIOD_MOTOR_INPUTS(in, v);
-        in.udc_v = (float)p->common.udc_v;
-        in.prev_sw = (uint16_t)state->prev_sw;
         MPC_STEP(&in, &out);
-        sw_dec = (int)out.sw;
-
-        /* 6. timing rule (plant-and-metrics.md "Timing") */
-        sw_apply = p->delay_compensation ? state->prev_sw : sw_dec;
-
-        /* 5. record the sample instant */
-        sim_period_record(&tr.common, j, &p->common, &state->common, &x, &v, out.vector, out.n_eval,
-                          out.fault, out.te_est_nm, out.psi_est_wb);
-        if (tr.sw != NULL) tr.sw[j] = (uint16_t)out.sw;
-        if (tr.applied_sw != NULL) tr.applied_sw[j] = (uint16_t)(sw_apply & 0xFFFF);
-
-        if (sw_dec < 0 || sw_dec > 7) {
-            state->common.motor = x;
-            return -3;
+        rc = period_finish(p, state, &x, &v, &out, &tr, j);
+        if (rc != 0) {
+            return rc;
         }
-
-        /* 7. integrate the plant over [t_k, t_k+1) */
-        (void)twolevel_plant_advance(&x, &p->common, sw_apply, v.load, p->common.dt_s, p->substeps);
-        if (!sim_period_finite(&x)) {
-            return -2; /* *state still holds the sample instant of period k */
-        }
-        state->prev_sw = sw_dec;
-        sim_period_commit(&state->common, &x, v.integral);
     }
     return 0;
+}
+
+int twolevel_sim_hil_input(const twolevel_sim_params_t *p, const twolevel_sim_state_t *state,
+                           double speed_ref_rad_s, double load_nm, void *in)
+{
+    pmsm_state_t x;
+    sim_sample_t v;
+
+    if (!run_args_valid(p, state) || in == NULL) {
+        return -1;
+    }
+    x = state->common.motor;
+    period_input(p, state, &x, speed_ref_rad_s, load_nm, &v, (mpc_input_t *)in);
+    return 0;
+}
+
+int twolevel_sim_hil_finish(const twolevel_sim_params_t *p, twolevel_sim_state_t *state,
+                            double speed_ref_rad_s, double load_nm, const void *out,
+                            const twolevel_sim_trace_t *trace, long j)
+{
+    twolevel_sim_trace_t tr;
+    mpc_input_t in;
+    pmsm_state_t x;
+    sim_sample_t v;
+
+    if (!run_args_valid(p, state) || out == NULL || j < 0) {
+        return -1;
+    }
+    if (trace != NULL) {
+        tr = *trace;
+    } else {
+        memset(&tr, 0, sizeof tr);
+    }
+    x = state->common.motor;
+    period_input(p, state, &x, speed_ref_rad_s, load_nm, &v, &in);
+    return period_finish(p, state, &x, &v, (const mpc_output_t *)out, &tr, j);
 }
