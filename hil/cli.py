@@ -5,7 +5,8 @@ codegen must never import hil, so the command is added from this side:
 console script points at :func:`main`.  Every other command is codegen's,
 unchanged.
 
-    mpcgen hil CONFIG [--port URL | --board virtual] --mode replay --states N --json FILE
+    mpcgen hil CONFIG [--port URL | --board virtual|qemu-m7] --mode replay --states N --json FILE
+    mpcgen hil CONFIG [--port URL | --board ...] --mode closed-loop --json FILE
 
 Exit codes as codegen.cli: 0 every state answered and equal, 1 mismatches,
 lost states or a board error, 2 bad input (one line, checked before any long
@@ -16,6 +17,7 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
+from typing import Any
 
 from codegen import cli as base
 from codegen import cliargs
@@ -23,7 +25,7 @@ from codegen.errors import ConfigError, MpcgenError, UsageError
 
 __all__ = ["build_parser", "main", "cmd_hil"]
 
-MODES = ("replay",)
+MODES = ("replay", "closed-loop")
 
 
 def cmd_hil(args: argparse.Namespace) -> int:
@@ -32,7 +34,7 @@ def cmd_hil(args: argparse.Namespace) -> int:
 
     from codegen.topology import topology_of
 
-    from .boards import VIRTUAL, open_board
+    from .boards import BOARDS, VIRTUAL, open_board
     from .replay import replay
     from .schema import Schema
     from .session import Session
@@ -41,12 +43,13 @@ def cmd_hil(args: argparse.Namespace) -> int:
     if args.port is not None and args.board is not None:
         raise UsageError("--port and --board exclude each other: --port URL for a board on a serial port, "
                          f"--board {VIRTUAL} for the virtual board")
-    if args.board not in (None, VIRTUAL):
-        raise UsageError(f"--board = {args.board!r}: the only board started by the harness is {VIRTUAL!r}; "
+    if args.board not in (None, *BOARDS):
+        raise UsageError(f"--board = {args.board!r}: the boards started by the harness are {', '.join(BOARDS)}; "
                          f"use --port URL for a board on a serial port")
     cliargs.at_least("--states", args.states, 1)
     cliargs.at_least("--retries", args.retries, 0)
     cliargs.at_least("--batch", args.batch, 1)
+    cliargs.at_least("--baud", args.baud, 1)
     if not args.timeout > 0:
         raise UsageError(f"--timeout = {args.timeout}: must be a number of seconds > 0")
     cliargs.output_file("--json", args.json)
@@ -63,14 +66,17 @@ def cmd_hil(args: argparse.Namespace) -> int:
         except (serial.SerialException, OSError, ValueError) as exc:
             raise UsageError(f"--port = {args.port!r}: cannot open it ({exc})") from None
     tables = topology_of(model).derive(model)
-    sets = replay_states(model, tables, args.states, args.seed)
+    sets = replay_states(model, tables, args.states, args.seed) if args.mode == "replay" else {}
     try:
-        with open_board(model, tables, args.port) as link:
+        with open_board(model, tables, args.port, board=args.board, baudrate=args.baud) as link:
             session = Session(link, schema, timeout_s=args.timeout, retries=args.retries, batch=args.batch)
             info = session.handshake()
             log(f"board {info.target}: config {info.config_hash}, schema {info.schema_hash}, clock "
                 f"{info.core_clock_hz} Hz, cycles in {info.cycle_unit}, max batch {info.max_batch}")
-            data = replay(session, model, tables, sets, show_progress=not args.quiet, log=log)
+            if args.mode == "replay":
+                data = replay(session, model, tables, sets, show_progress=not args.quiet, log=log)
+            else:
+                return _loop_mode(args, session, model, tables, log)
     except serial.SerialException as exc:
         raise MpcgenError(f"serial link failed: {exc}") from None
     print(f"{data['states']} states  mismatches {data['mismatches']}  lost {data['lost']}  "
@@ -79,6 +85,16 @@ def cmd_hil(args: argparse.Namespace) -> int:
           f"min/median/p99/max {data['cycles_min']}/{data['cycles_median']}/{data['cycles_p99']}/{data['cycles_max']}")
     base._write_json(args.json, data)
     return base.EXIT_OK if data["mismatches"] == 0 and data["lost"] == 0 else base.EXIT_FAIL
+
+
+def _loop_mode(args: argparse.Namespace, session: Any, model: Any, tables: Any, log: Any) -> int:
+    """Mode closed-loop: run, print one line, write the JSON; the exit code."""
+    from .closedloop import closed_loop, summary_line
+
+    data = closed_loop(session, model, tables, show_progress=not args.quiet, log=log)
+    print(summary_line(data))
+    base._write_json(args.json, data)
+    return base.EXIT_OK if data["ok"] else base.EXIT_FAIL
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -91,10 +107,15 @@ def build_parser() -> argparse.ArgumentParser:
     where = h.add_mutually_exclusive_group()
     where.add_argument("--port", help="serial URL of the board: a device (/dev/ttyACM0), a pseudo-terminal or "
                                       "socket://HOST:PORT")
-    where.add_argument("--board", help="virtual: the host port built with the protocol, started by the harness "
-                                       "(the default)")
+    where.add_argument("--board", help="board started by the harness: virtual (the default), the host port built "
+                                       "with the protocol; qemu-m7, the emulated Cortex-M7 in QEMU (cycles in "
+                                       "instructions)")
+    h.add_argument("--baud", type=int, default=921600,
+                   help="baud rate of a serial device given with --port (default 921600)")
     h.add_argument("--mode", choices=MODES, default="replay",
-                   help="replay: recorded closed-loop, random and adversarial states compared bit for bit")
+                   help="replay: recorded closed-loop, random and adversarial states compared bit for bit; "
+                        "closed-loop: the host simulates the plant, the board decides every period (the "
+                        "decisions must equal mpcgen simulate's)")
     h.add_argument("--states", type=int, default=2000, help="states of each source (default 2000)")
     h.add_argument("--seed", type=int, default=1, help="seed of the random states (default 1)")
     h.add_argument("--timeout", type=float, default=0.5, help="seconds before an unanswered frame is sent again")

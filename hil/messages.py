@@ -68,7 +68,7 @@ def info_payload(schema: Schema, target: str, *, clock_hz: int = 0, overhead: in
     rec["max_batch"], rec["max_frame"] = schema.max_batch, MAX_FRAME
     rec["target"] = text_words(target, 16)
     rec["number_format"] = text_words(schema.number_format, 8)
-    rec["cycle_unit"] = text_words(cycle_unit, 8)
+    rec["cycle_unit"] = text_words(cycle_unit, 16)
     return schema.info.pack(rec).tobytes()
 
 

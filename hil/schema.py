@@ -81,7 +81,7 @@ INFO = Record("hil_info", fields("""
     max_frame         u16  1   most octets of a decoded frame
     target            u16  16  board name, one ASCII character per word, NUL padded
     number_format     u16  8   number format of the records, as target
-    cycle_unit        u16  8   unit of the cycles, as target
+    cycle_unit        u16  16  unit of the cycles, as target
 """))
 RESULT_HEAD = Record("hil_result_head", fields("""
     cycles  i32  1  net cycles of the controller call (overhead subtracted, >= 0)

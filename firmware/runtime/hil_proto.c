@@ -87,7 +87,7 @@ static void send_info(uint16_t seq)
     info.max_frame = HIL_MAX_FRAME;
     put_text(info.target, 16u, PORT_BOARD);
     put_text(info.number_format, 8u, HIL_NUMBER_FORMAT);
-    put_text(info.cycle_unit, 8u, PORT_CYCLE_UNIT);
+    put_text(info.cycle_unit, 16u, PORT_CYCLE_UNIT);
     hil_encode_info(&info, &tx[HIL_HEAD]);
     send_frame(HIL_MSG_INFO, seq, HIL_INFO_OCTETS);
 }

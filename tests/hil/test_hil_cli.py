@@ -31,7 +31,7 @@ def test_hil_replay_writes_the_summary(tmp_path, capsys, board):
 
 @pytest.mark.parametrize("args,msg", [
     (["--states", "0"], "--states = 0"),
-    (["--board", "qemu-m7"], "--board = 'qemu-m7'"),
+    (["--board", "stm32h743"], "--board = 'stm32h743'"),
     (["--port", "/nonexistent/tty"], "--port = '/nonexistent/tty': cannot open"),
     (["--timeout", "0"], "--timeout = 0.0"),
     (["--json", "/proc/x/y.json"], "--json"),

@@ -65,6 +65,14 @@
 #define USART3_BRR CM7_REG(USART3_BASE + 0x0Cu)
 #define USART3_ISR CM7_REG(USART3_BASE + 0x1Cu)
 #define USART3_TDR CM7_REG(USART3_BASE + 0x28u)
+/* Receive (RM0433 48.7.10 ISR: RXNE/RXFNE bit 5 "read data register not
+ * empty", ORE bit 3 overrun; 48.7.11 ICR +0x20: ORECF bit 3 clears ORE;
+ * 48.7.13 RDR +0x24: received data in bits 8:0, reading it clears RXNE). */
+#define USART3_ICR CM7_REG(USART3_BASE + 0x20u)
+#define USART3_RDR CM7_REG(USART3_BASE + 0x24u)
+#define USART_ISR_RXNE (1u << 5)
+#define USART_ISR_ORE  (1u << 3)
+#define USART_ICR_ORECF (1u << 3)
 #define USART_CR1_UE (1u << 0)
 #define USART_CR1_RE (1u << 2)
 #define USART_CR1_TE (1u << 3)

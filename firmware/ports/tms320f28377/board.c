@@ -105,6 +105,25 @@ void port_init(void)
     console_init();
 }
 
+#if defined(MPC_HIL)
+/* Polled receive (SPRUHX5 19.14 SCIRXST/SCIRXBUF, FIFO off): one 16-bit
+ * word per character, its low 8 bits.  A receive error is cleared by
+ * pulsing SWRESET (the lost octets show as a bad frame the host sends again). */
+uint16_t port_read(uint16_t *octets, uint16_t max)
+{
+    uint16_t n = 0u;
+    if ((SCIA_SCIRXST & SCI_RXST_RXERROR) != 0u) {
+        SCIA_SCICTL1 = (uint16_t)(SCIA_SCICTL1 & (uint16_t)~SCI_CTL1_SWRESET);
+        SCIA_SCICTL1 = (uint16_t)(SCIA_SCICTL1 | SCI_CTL1_SWRESET);
+    }
+    while (n < max && (SCIA_SCIRXST & SCI_RXST_RXRDY) != 0u) {
+        octets[n] = (uint16_t)(SCIA_SCIRXBUF & 0xFFu);
+        ++n;
+    }
+    return n;
+}
+#endif
+
 void port_putc(uint16_t c)
 {
     while ((SCIA_SCICTL2 & SCI_CTL2_TXRDY) == 0u) {

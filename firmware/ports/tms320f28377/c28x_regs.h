@@ -70,6 +70,15 @@
 #define SCIA_SCILBAUD C28X_REG16(0x7203u)
 #define SCIA_SCICTL2 C28X_REG16(0x7204u)  /* TXEMPTY bit 6, TXRDY bit 7 */
 #define SCIA_SCITXBUF C28X_REG16(0x7209u)
+/* 19.14 SCIRXST (+0x05): RXRDY bit 6 (a character is in SCIRXBUF), RXERROR
+ * bit 7 (break, framing, overrun or parity error; cleared only by SWRESET);
+ * SCIRXBUF (+0x07): received character in bits 7:0 (SAR), reading it
+ * clears RXRDY. */
+#define SCIA_SCIRXST C28X_REG16(0x7205u)
+#define SCIA_SCIRXBUF C28X_REG16(0x7207u)
+#define SCI_RXST_RXRDY (1u << 6)
+#define SCI_RXST_RXERROR (1u << 7)
+#define SCI_CTL1_SWRESET (1u << 5)
 #define SCIA_SCIFFTX C28X_REG16(0x720Au)  /* SCIRST bit 15 */
 #define SCI_CTL2_TXRDY (1u << 7)
 #define SCI_CTL2_TXEMPTY (1u << 6)

@@ -1,0 +1,142 @@
+"""The emulated board: the qemu-m7 firmware built with the protocol, run in QEMU, UART0 on a TCP socket.
+
+:func:`build_qemu_board` writes the qemu-m7 project with the protocol
+(``-DMPC_HIL``) into the build cache, one folder per config and schema, and
+builds it with arm-none-eabi-gcc under a file lock.  :class:`QemuBoard`
+starts QEMU (``codegen.stages.firmware.qemu_command``: mps2-an500, -icount,
+semihosting) with ``-serial tcp:127.0.0.1:PORT,server=on,wait=on,nodelay=on``
+on a free port, in its own process group; the harness connects with pyserial
+``socket://127.0.0.1:PORT``.  QEMU waits for that connection before the
+guest runs and is always killed at the end (``emulate._kill_group``).
+
+Cycles: the protocol image counts instructions (firmware/ports/qemu-m7/board.c:
+SysTick under ``-icount shift=10``, converted on the board), so RESULT cycles
+are the instructions of the step, as ``mpcgen bench --emulated`` reports them.
+
+Speed: the emulated UART takes one octet at a time from the socket (about
+15-20 kB/s host to guest), so the harness keeps the session's window small
+(:data:`WINDOW_OCTETS`) and its timeout long (:data:`TIMEOUT_S`).
+"""
+from __future__ import annotations
+
+import fcntl
+import socket
+import subprocess
+import time
+from pathlib import Path
+from typing import Any
+
+from codegen.hostbuild import cache_root
+from codegen.model import Model
+from codegen.stages.emulate import EmulationError, _kill_group
+from codegen.stages.firmware import (
+    ICOUNT_SHIFT,
+    QEMU,
+    build_firmware,
+    qemu_command,
+    require_tools,
+    write_firmware_project,
+)
+
+from .codecgen import protocol_build
+from .schema import Schema
+
+__all__ = ["QEMU_BOARD", "TIMEOUT_S", "WINDOW_OCTETS", "QemuBoard", "build_qemu_board"]
+
+#: name of the emulated board
+QEMU_BOARD = "qemu-m7"
+#: unanswered request octets kept in flight on the emulated UART (about 0.12 s of input at 17 kB/s; no resends measured)
+WINDOW_OCTETS = 2048
+#: seconds before an unanswered frame is sent again on the emulated board
+TIMEOUT_S = 2.0
+#: -icount shift the protocol image's instruction count assumes (PORT_ICOUNT_SHIFT of the qemu-m7 port)
+PORT_ICOUNT_SHIFT = 10
+
+
+def build_qemu_board(model: Model, tables: Any) -> Path:
+    """The qemu-m7 protocol image (ELF) of ``model``, built once per config and schema."""
+    schema = Schema.of(model)
+    root = cache_root() / "hil"
+    root.mkdir(parents=True, exist_ok=True)
+    name = f"{model.prefix}-{schema.config_hash}-{schema.schema_hash}-qemu-m7"
+    with open(root / f"{name}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        project = root / name
+        write_firmware_project(model, tables, QEMU_BOARD, project, 1, n_bench=0,
+                               protocol=protocol_build(model, schema))
+        res = build_firmware(project, QEMU_BOARD)
+    return res.image
+
+
+def free_port() -> int:
+    """A TCP port on 127.0.0.1 free at the time of the call."""
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+class QemuBoard:
+    """QEMU running a protocol image, UART0 served on ``127.0.0.1:port``; ``url`` is pyserial's URL."""
+
+    def __init__(self, image: Path, log: Path | None = None, *, start_timeout_s: float = 10.0) -> None:
+        if ICOUNT_SHIFT != PORT_ICOUNT_SHIFT:
+            raise EmulationError(f"the qemu-m7 protocol image counts instructions for -icount shift="
+                                 f"{PORT_ICOUNT_SHIFT}, QEMU runs with shift={ICOUNT_SHIFT}")
+        self.image = Path(image)
+        self.log = log or self.image.with_suffix(".qemu.log")
+        self.start_timeout_s = start_timeout_s
+        self.proc: subprocess.Popen | None = None
+        self.port = 0
+        self.url = ""
+
+    def start(self) -> QemuBoard:
+        """Start QEMU and wait until its socket listens (QEMU then waits for the harness)."""
+        require_tools((QEMU,))
+        for _ in range(3):  # another program may take the free port first
+            self.port = free_port()
+            serial = f"tcp:127.0.0.1:{self.port},server=on,wait=on,nodelay=on"
+            with open(self.log, "wb") as log:
+                self.proc = subprocess.Popen(qemu_command(self.image, serial), stdin=subprocess.DEVNULL,
+                                             stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+            if self._listening():
+                self.url = f"socket://127.0.0.1:{self.port}"
+                return self
+            self.stop()
+        text = self.log.read_text(errors="replace")[-500:] if self.log.exists() else ""
+        raise EmulationError(f"QEMU did not open its serial socket: {text}")
+
+    def _listening(self) -> bool:
+        deadline = time.monotonic() + self.start_timeout_s
+        assert self.proc is not None
+        while time.monotonic() < deadline:
+            if self.proc.poll() is not None:
+                return False
+            if self._port_bound():
+                return True
+            time.sleep(0.02)
+        return False
+
+    def _port_bound(self) -> bool:
+        """Whether something listens on the port, seen in /proc/net/tcp (Linux) without connecting:
+        QEMU takes only one connection, the harness's."""
+        tcp = Path("/proc/net/tcp")
+        if not tcp.exists():
+            time.sleep(1.0)
+            return True
+        for line in tcp.read_text().splitlines()[1:]:
+            f = line.split()
+            if len(f) > 3 and f[1].endswith(f":{self.port:04X}") and f[3] == "0A":  # 0A: LISTEN
+                return True
+        return False
+
+    def stop(self) -> None:
+        """Kill QEMU's process group and reap it."""
+        if self.proc is not None:
+            _kill_group(self.proc)
+            self.proc = None
+
+    def __enter__(self) -> QemuBoard:
+        return self.start()
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
