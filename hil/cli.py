@@ -21,7 +21,7 @@ from typing import Any
 
 from codegen import cli as base
 from codegen import cliargs
-from codegen.errors import ConfigError, MpcgenError, UsageError
+from codegen.errors import MpcgenError, UsageError
 
 __all__ = ["build_parser", "main", "cmd_hil"]
 
@@ -35,6 +35,8 @@ def cmd_hil(args: argparse.Namespace) -> int:
     from codegen.topology import topology_of
 
     from .boards import BOARDS, VIRTUAL, open_board
+    from .qemu import QEMU_BOARD
+    from .qemu import TIMEOUT_S as QEMU_TIMEOUT_S
     from .replay import replay
     from .schema import Schema
     from .session import Session
@@ -69,7 +71,9 @@ def cmd_hil(args: argparse.Namespace) -> int:
     sets = replay_states(model, tables, args.states, args.seed) if args.mode == "replay" else {}
     try:
         with open_board(model, tables, args.port, board=args.board, baudrate=args.baud) as link:
-            session = Session(link, schema, timeout_s=args.timeout, retries=args.retries, batch=args.batch)
+            timeout_s = args.timeout if args.timeout is not None else (QEMU_TIMEOUT_S if args.board == QEMU_BOARD
+                                                                       else 0.5)
+            session = Session(link, schema, timeout_s=timeout_s, retries=args.retries, batch=args.batch)
             info = session.handshake()
             log(f"board {info.target}: config {info.config_hash}, schema {info.schema_hash}, clock "
                 f"{info.core_clock_hz} Hz, cycles in {info.cycle_unit}, max batch {info.max_batch}")
@@ -118,7 +122,8 @@ def build_parser() -> argparse.ArgumentParser:
                         "decisions must equal mpcgen simulate's)")
     h.add_argument("--states", type=int, default=2000, help="states of each source (default 2000)")
     h.add_argument("--seed", type=int, default=1, help="seed of the random states (default 1)")
-    h.add_argument("--timeout", type=float, default=0.5, help="seconds before an unanswered frame is sent again")
+    h.add_argument("--timeout", type=float, default=None,
+                   help="seconds before an unanswered frame is sent again (default 0.5; qemu-m7: 10)")
     h.add_argument("--retries", type=int, default=3, help="times a state is sent again before it counts as lost")
     h.add_argument("--batch", type=int, default=16, help="states per BATCH frame (at most the board's max batch)")
     h.add_argument("--json", help="write the summary as JSON")
@@ -128,22 +133,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``mpcgen``: every codegen command, and ``hil``."""
-    parser = build_parser()
-    try:
-        args = parser.parse_args(argv)
-    except SystemExit as exc:  # argparse: 2 on bad usage, 0 on --help
-        return int(exc.code or 0)
-    try:
-        return int(args.func(args))
-    except (ConfigError, UsageError) as exc:
-        base._err(str(exc))
-        return base.EXIT_BAD_INPUT
-    except MpcgenError as exc:
-        base._err(str(exc))
-        return base.EXIT_FAIL
-    except KeyboardInterrupt:
-        base._err("interrupted")
-        return 130
+    return base.run(build_parser(), argv)
 
 
 if __name__ == "__main__":

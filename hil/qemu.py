@@ -7,7 +7,7 @@ starts QEMU (``codegen.stages.firmware.qemu_command``: mps2-an500, -icount,
 semihosting) with ``-serial tcp:127.0.0.1:PORT,server=on,wait=on,nodelay=on``
 on a free port, in its own process group; the harness connects with pyserial
 ``socket://127.0.0.1:PORT``.  QEMU waits for that connection before the
-guest runs and is always killed at the end (``emulate._kill_group``).
+guest runs and is always killed at the end (``emulate.kill_group``).
 
 Cycles: the protocol image counts instructions (firmware/ports/qemu-m7/board.c:
 SysTick under ``-icount shift=10``, converted on the board), so RESULT cycles
@@ -19,27 +19,22 @@ Speed: the emulated UART takes one octet at a time from the socket (about
 """
 from __future__ import annotations
 
-import fcntl
 import socket
 import subprocess
 import time
 from pathlib import Path
 from typing import Any
 
-from codegen.hostbuild import cache_root
 from codegen.model import Model
-from codegen.stages.emulate import EmulationError, _kill_group
+from codegen.stages.emulate import EmulationError, kill_group
 from codegen.stages.firmware import (
     ICOUNT_SHIFT,
     QEMU,
-    build_firmware,
     qemu_command,
     require_tools,
-    write_firmware_project,
 )
 
-from .codecgen import protocol_build
-from .schema import Schema
+from .virtual import build_protocol_image
 
 __all__ = ["QEMU_BOARD", "TIMEOUT_S", "WINDOW_OCTETS", "QemuBoard", "build_qemu_board"]
 
@@ -47,25 +42,16 @@ __all__ = ["QEMU_BOARD", "TIMEOUT_S", "WINDOW_OCTETS", "QemuBoard", "build_qemu_
 QEMU_BOARD = "qemu-m7"
 #: unanswered request octets kept in flight on the emulated UART (about 0.12 s of input at 17 kB/s; no resends measured)
 WINDOW_OCTETS = 2048
-#: seconds before an unanswered frame is sent again on the emulated board
-TIMEOUT_S = 2.0
+#: seconds before an unanswered frame is sent again on the emulated board (QEMU slows down a lot on a
+#: loaded machine; a resend there only adds load, never a lost frame: its UART has flow control)
+TIMEOUT_S = 10.0
 #: -icount shift the protocol image's instruction count assumes (PORT_ICOUNT_SHIFT of the qemu-m7 port)
 PORT_ICOUNT_SHIFT = 10
 
 
 def build_qemu_board(model: Model, tables: Any) -> Path:
     """The qemu-m7 protocol image (ELF) of ``model``, built once per config and schema."""
-    schema = Schema.of(model)
-    root = cache_root() / "hil"
-    root.mkdir(parents=True, exist_ok=True)
-    name = f"{model.prefix}-{schema.config_hash}-{schema.schema_hash}-qemu-m7"
-    with open(root / f"{name}.lock", "w") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
-        project = root / name
-        write_firmware_project(model, tables, QEMU_BOARD, project, 1, n_bench=0,
-                               protocol=protocol_build(model, schema))
-        res = build_firmware(project, QEMU_BOARD)
-    return res.image
+    return build_protocol_image(model, tables, QEMU_BOARD, suffix="-qemu-m7")
 
 
 def free_port() -> int:
@@ -132,7 +118,7 @@ class QemuBoard:
     def stop(self) -> None:
         """Kill QEMU's process group and reap it."""
         if self.proc is not None:
-            _kill_group(self.proc)
+            kill_group(self.proc)
             self.proc = None
 
     def __enter__(self) -> QemuBoard:

@@ -24,21 +24,29 @@ from codegen.stages.firmware import build_firmware, write_firmware_project
 from .codecgen import protocol_build
 from .schema import Schema
 
-__all__ = ["build_virtual_board", "VirtualBoard"]
+__all__ = ["build_protocol_image", "build_virtual_board", "VirtualBoard"]
+
+
+def build_protocol_image(model: Model, tables: Any, board: str, *, suffix: str = "",
+                         make_vars: dict[str, str] | None = None) -> Path:
+    """The protocol image of ``model`` for firmware board ``board``, built once per config, schema
+    and board under the build cache (a file lock serialises parallel builders)."""
+    schema = Schema.of(model)
+    root = cache_root() / "hil"
+    root.mkdir(parents=True, exist_ok=True)
+    name = f"{model.prefix}-{schema.config_hash}-{schema.schema_hash}{suffix}"
+    with open(root / f"{name}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        project = root / name
+        write_firmware_project(model, tables, board, project, 1, n_bench=0, protocol=protocol_build(model, schema))
+        res = build_firmware(project, board, make_vars=make_vars)
+    return res.image
 
 
 def build_virtual_board(model: Model, tables: Any, *, sanitize: bool = False) -> Path:
     """The protocol program of ``model`` for the host (built once per config and schema)."""
-    schema = Schema.of(model)
-    root = cache_root() / "hil"
-    root.mkdir(parents=True, exist_ok=True)
-    name = f"{model.prefix}-{schema.config_hash}-{schema.schema_hash}{'-san' if sanitize else ''}"
-    with open(root / f"{name}.lock", "w") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
-        project = root / name
-        write_firmware_project(model, tables, "host", project, 1, n_bench=0, protocol=protocol_build(model, schema))
-        res = build_firmware(project, "host", make_vars={"SANITIZE": "1"} if sanitize else None)
-    return res.image
+    return build_protocol_image(model, tables, "host", suffix="-san" if sanitize else "",
+                                make_vars={"SANITIZE": "1"} if sanitize else None)
 
 
 class VirtualBoard:

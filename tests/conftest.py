@@ -7,11 +7,13 @@ Test folders have no ``__init__.py``: every test module's basename is unique.
 """
 from __future__ import annotations
 
+import functools
 import re
 import shutil
 import subprocess
 from collections.abc import Iterable
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -34,6 +36,24 @@ STRICT_WARN = ("-std=c99", "-O2", "-Wall", "-Wextra", "-Wconversion", "-Wdouble-
 M7_FLAGS = ("-mcpu=cortex-m7", "-mthumb", "-mfpu=fpv5-d16", "-mfloat-abi=hard", "-fno-math-errno")
 #: C spellings the C28x profile must not use (no 8-bit types, no double)
 C28X_FORBIDDEN = ("int8_t", "uint8_t", "double", "char ")
+
+
+#: (example, strategy) of every strategy of both topologies (firmware and HIL tests)
+CASES = [("spmsm", s) for s in TWO_LEVEL] + [("tlevel", s) for s in TTYPE_STRATEGIES]
+CASE_IDS = [f"{c}-{s}" for c, s in CASES]
+
+
+@functools.cache
+def example(config: str, strategy: str) -> tuple[Model, Any]:
+    """An example ("spmsm" or "tlevel") with ``strategy`` and its derived tables (two-level: the
+    published switch tables, so that no training run is needed)."""
+    from codegen.topology import topology_of
+
+    overrides: dict[str, object] = {"controller.strategy": strategy}
+    if config == "spmsm":
+        overrides["controller.tables"] = "published"
+    m = load_config(SPMSM if config == "spmsm" else TTYPE, overrides)
+    return m, topology_of(m).derive(m)
 
 
 def model_for(path: Path, **overrides: object) -> Model:

@@ -81,6 +81,16 @@ def sincos_coeffs() -> SinCosCoeffs:
     )
 
 
+def _horner(ops: Any, coeffs: Any, x: Any) -> Any:
+    """(((c_n x + c_{n-1}) x + ...) + c_0) x, lowest coefficient first in ``coeffs``: the operation
+    order of the C polynomials (one multiply and one add per coefficient)."""
+    p = ops.mul(coeffs[-1], x)
+    for c in reversed(coeffs[:-1]):
+        p = ops.add(p, c)
+        p = ops.mul(p, x)
+    return p
+
+
 def sincos(ops: Ops, x: Any, k: SinCosCoeffs | None = None) -> tuple[Any, Any]:
     """sin and cos of ``x`` through the format's ``ops``: the exact operation sequence of the C
     (``templates/common/kernels.j2`` ``sincos_fn``)."""
@@ -96,21 +106,9 @@ def sincos(ops: Ops, x: Any, k: SinCosCoeffs | None = None) -> tuple[Any, Any]:
     t = ops.mul(fn, k.pio2_lo)
     r = ops.sub(r, t)
     r2 = ops.mul(r, r)
-    ps = ops.mul(k.s[2], r2)
-    ps = ops.add(ps, k.s[1])
-    ps = ops.mul(ps, r2)
-    ps = ops.add(ps, k.s[0])
-    ps = ops.mul(ps, r2)
-    ps = ops.mul(ps, r)
+    ps = ops.mul(_horner(ops, k.s, r2), r)  # (S3 + S5 r^2 + S7 r^4) r^2 r
     sr = ops.add(r, ps)
-    pc = ops.mul(k.c[3], r2)
-    pc = ops.add(pc, k.c[2])
-    pc = ops.mul(pc, r2)
-    pc = ops.add(pc, k.c[1])
-    pc = ops.mul(pc, r2)
-    pc = ops.add(pc, k.c[0])
-    pc = ops.mul(pc, r2)
-    cr = ops.add(ops.const(1.0), pc)
+    cr = ops.add(ops.const(1.0), _horner(ops, k.c, r2))  # 1 + (C2 + C4 r^2 + C6 r^4 + C8 r^6) r^2
     q = n & 3
     quadrant = [q == 0, q == 1, q == 2]
     s_out = ops.select(quadrant, [sr, cr, ops.neg(sr)], ops.neg(cr))

@@ -14,8 +14,10 @@ field with w > 1 values per period (the T-type's per-segment ``uab_v``,
 """
 from __future__ import annotations
 
+import contextlib
 import io
 import zipfile
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any, TextIO
 
@@ -86,3 +88,17 @@ class TraceWriter:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+@contextlib.contextmanager
+def trace_writer(path: Path | None, trace: Any) -> Iterator[TraceWriter | None]:
+    """A :class:`TraceWriter` of the trace struct ``trace``'s fields to ``path`` (None: no writer),
+    closed when the block ends."""
+    from codegen.simulator.driver import trace_fields
+
+    writer = TraceWriter(path, list(trace_fields(trace))) if path is not None else None
+    try:
+        yield writer
+    finally:
+        if writer is not None:
+            writer.close()

@@ -59,7 +59,7 @@ class QemuRun:
 
 
 
-def _kill_group(proc: subprocess.Popen) -> None:
+def kill_group(proc: subprocess.Popen) -> None:
     """Kill QEMU's process group (it was started in its own session) and reap it."""
     if proc.poll() is None:
         try:
@@ -86,7 +86,7 @@ def run_qemu(elf: Path, *, timeout_s: float = 120.0, icount_shift: int = ICOUNT_
         except subprocess.TimeoutExpired:
             timed_out = True
         finally:
-            _kill_group(proc)
+            kill_group(proc)
             if proc.stdout is not None:
                 proc.stdout.close()
         text = uart.read_text(errors="replace") if uart.exists() else ""

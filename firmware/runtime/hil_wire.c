@@ -29,9 +29,9 @@ uint32_t hil_get_u32(const uint16_t *o)
 
 float hil_f32_from_bits(uint32_t bits)
 {
-    float value;
-    memcpy(&value, &bits, sizeof value);
-    return value;
+    union { uint32_t bits; float value; } pun; /* C99 6.5.2.3: reading the other member reinterprets */
+    pun.bits = bits;
+    return pun.value;
 }
 
 uint32_t hil_i32_bits(int32_t value)

@@ -13,33 +13,16 @@ from __future__ import annotations
 
 import os
 import shutil
-from functools import cache
 from pathlib import Path
-from typing import Any
 
 import pytest
 
-from codegen.config import load_config
-from codegen.model import Model
-from codegen.topology import topology_of
+from conftest import CASE_IDS, CASES, example  # noqa: F401  (re-exported for the firmware tests)
 
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLES = {"spmsm": ROOT / "examples" / "seed001_spmsm.toml", "tlevel": ROOT / "examples" / "seed000_tlevel.toml"}
 SPMSM = EXAMPLES["spmsm"]
 TTYPE = EXAMPLES["tlevel"]  # the example keeps its file name and C prefix "tlevel"
-#: (example, strategy) of every strategy of both topologies
-CASES = [("spmsm", s) for s in ("conventional", "s1", "s2", "s3")] + [("tlevel", s) for s in ("mpdtc27", "mpdtc63")]
-CASE_IDS = [f"{c}-{s}" for c, s in CASES]
-
-
-@cache
-def example(config: str, strategy: str) -> tuple[Model, Any]:
-    """An example config with ``strategy`` and its derived tables (two-level: published switch tables)."""
-    overrides: dict[str, object] = {"controller.strategy": strategy}
-    if config == "spmsm":
-        overrides["controller.tables"] = "published"  # no training run in the firmware tests
-    m = load_config(EXAMPLES[config], overrides)
-    return m, topology_of(m).derive(m)
 
 
 def _missing(*exes: str) -> list[str]:

@@ -30,7 +30,7 @@ from codegen.topology import topology_of
 from hil.boards import open_board
 from hil.cli import main
 from hil.messages import split_results
-from hil.qemu import QemuBoard, build_qemu_board
+from hil.qemu import TIMEOUT_S, QemuBoard, build_qemu_board
 from hil.schema import Schema
 from hil.session import Session
 
@@ -54,7 +54,7 @@ def test_qemu_replays_the_bench_set_with_bench_instruction_counts(config, strate
     schema = Schema.of(model)
     states = trajectory_states(model, N_BENCH)
     with open_board(model, tables, None, board="qemu-m7") as link:
-        session = Session(link, schema)
+        session = Session(link, schema, timeout_s=TIMEOUT_S)
         info = session.handshake()
         assert info.target == "qemu-m7" and info.cycle_unit == "instructions"
         res = session.run(states)

@@ -30,7 +30,9 @@
 #ifndef SIM_PERIOD_H
 #define SIM_PERIOD_H
 
+#include <stddef.h>
 #include <stdint.h>
+#include <string.h>
 
 #include "sim_api.h"
 
@@ -102,5 +104,112 @@ static inline void sim_period_motor_store(pmsm_state_t *s, const double *x)
 
 /* Commit period k: plant motor state, PI integrator, k += 1. */
 void sim_period_commit(sim_state_t *s, const pmsm_state_t *x, double integral);
+
+/*
+ * The entry points every topology's simulator has (declared in sim_api.h):
+ * api##_run, api##_hil_input and api##_hil_finish, defined by
+ * SIM_PERIOD_ENTRY_POINTS(api, plant_t) in the topology's sim .c, after its
+ * mpc_binding.h and these static functions of that file (P, S, T the api's
+ * params, state and trace types, x the topology's plant_t):
+ *   int  params_valid(const P *p)        the parameters (p may be NULL), 1 valid
+ *   int  state_valid(const S *state)     the topology's carried state, 1 valid
+ *   void plant_load(const S *state, plant_t *x)
+ *                                        the plant at the sample instant of
+ *                                        period state->common.k
+ *   void period_input(const P *p, const S *state, plant_t *x, double w_ref,
+ *                     double load, sim_sample_t *v, mpc_input_t *in)
+ *                                        steps 1.-4. (step 1 may set x's speed)
+ *   int  period_finish(const P *p, S *state, plant_t *x, const sim_sample_t *v,
+ *                      const mpc_output_t *out, const T *tr, long j)
+ *                                        steps 5.-7. with the decision out and
+ *                                        the commit of the period (trace entry j)
+ * Every period of api##_run and of api##_hil_finish runs the same
+ * sim_period_one (the plant reloaded from the committed state), so a run
+ * through the HIL entry points with the compiled step's decisions equals
+ * api##_run bit for bit.
+ */
+#define SIM_PERIOD_ENTRY_POINTS(api, plant_t)                                                      \
+    /* The given trace, or one that records nothing. */                                            \
+    static void sim_period_trace(const api##_trace_t *trace, api##_trace_t *tr)                    \
+    {                                                                                              \
+        if (trace != NULL) {                                                                       \
+            *tr = *trace;                                                                          \
+        } else {                                                                                   \
+            memset(tr, 0, sizeof *tr);                                                             \
+        }                                                                                          \
+    }                                                                                              \
+                                                                                                   \
+    /* p and the carried state are valid (state may be NULL). */                                   \
+    static int sim_period_valid(const api##_params_t *p, const api##_state_t *state)               \
+    {                                                                                              \
+        return params_valid(p) && state != NULL && state->common.k >= 0 && state_valid(state);     \
+    }                                                                                              \
+                                                                                                   \
+    /* Period state->common.k (trace entry j) with the decision out, or (out NULL) the step's. */  \
+    static int sim_period_one(const api##_params_t *p, api##_state_t *state, double w_ref,         \
+                              double load, const mpc_output_t *out, const api##_trace_t *tr,       \
+                              long j)                                                              \
+    {                                                                                              \
+        plant_t x;                                                                                 \
+        sim_sample_t v;                                                                            \
+        mpc_input_t in;                                                                            \
+        mpc_output_t step_out;                                                                     \
+                                                                                                   \
+        plant_load(state, &x);                                                                     \
+        period_input(p, state, &x, w_ref, load, &v, &in);                                          \
+        if (out == NULL) {                                                                         \
+            memset(&step_out, 0, sizeof step_out);                                                 \
+            MPC_STEP(&in, &step_out);                                                              \
+            out = &step_out;                                                                       \
+        }                                                                                          \
+        return period_finish(p, state, &x, &v, out, tr, j);                                        \
+    }                                                                                              \
+                                                                                                   \
+    int api##_run(const api##_params_t *p, const double *speed_ref_rad_s, const double *load_nm,   \
+                  long n, api##_trace_t *trace, api##_state_t *state)                              \
+    {                                                                                              \
+        api##_trace_t tr;                                                                          \
+        long j;                                                                                    \
+                                                                                                   \
+        if (!sim_period_valid(p, state)                                                            \
+            || !sim_period_args_valid(&state->common, n, speed_ref_rad_s, load_nm)) {              \
+            return -1;                                                                             \
+        }                                                                                          \
+        sim_period_trace(trace, &tr);                                                              \
+        for (j = 0; j < n; ++j) {                                                                  \
+            const int rc = sim_period_one(p, state, speed_ref_rad_s[j], load_nm[j], NULL, &tr, j); \
+            if (rc != 0) {                                                                         \
+                return rc;                                                                         \
+            }                                                                                      \
+        }                                                                                          \
+        return 0;                                                                                  \
+    }                                                                                              \
+                                                                                                   \
+    int api##_hil_input(const api##_params_t *p, const api##_state_t *state,                       \
+                        double speed_ref_rad_s, double load_nm, void *in)                          \
+    {                                                                                              \
+        plant_t x;                                                                                 \
+        sim_sample_t v;                                                                            \
+                                                                                                   \
+        if (!sim_period_valid(p, state) || in == NULL) {                                           \
+            return -1;                                                                             \
+        }                                                                                          \
+        plant_load(state, &x);                                                                     \
+        period_input(p, state, &x, speed_ref_rad_s, load_nm, &v, (mpc_input_t *)in);              \
+        return 0;                                                                                  \
+    }                                                                                              \
+                                                                                                   \
+    int api##_hil_finish(const api##_params_t *p, api##_state_t *state, double speed_ref_rad_s,    \
+                         double load_nm, const void *out, const api##_trace_t *trace, long j)      \
+    {                                                                                              \
+        api##_trace_t tr;                                                                          \
+                                                                                                   \
+        if (!sim_period_valid(p, state) || out == NULL || j < 0) {                                 \
+            return -1;                                                                             \
+        }                                                                                          \
+        sim_period_trace(trace, &tr);                                                              \
+        return sim_period_one(p, state, speed_ref_rad_s, load_nm, (const mpc_output_t *)out, &tr,  \
+                              j);                                                                  \
+    }
 
 #endif /* SIM_PERIOD_H */

@@ -21,8 +21,7 @@ from codegen.results import WINDOW_HEAD, fault_warning, footnotes, versions, win
 from codegen.results import clean_json as _clean
 from codegen.results import flagged_cell as flagged
 from codegen.results import fmt_cell as _fmt
-from codegen.simulator.driver import trace_fields
-from codegen.simulator.export import TraceWriter
+from codegen.simulator.export import trace_writer
 from codegen.simulator.memory import check_trace_memory
 from codegen.topologies.ttype.metrics import three_level_metrics
 
@@ -120,8 +119,7 @@ def run_three_level(model: Model, strategies: list[str], plots: Path | None = No
         check_trace_memory(m, TRACE)
     results: dict[str, dict] = {}
     warnings: list[str] = []
-    writer = TraceWriter(traces, list(trace_fields(TRACE))) if traces is not None else None
-    try:
+    with trace_writer(traces, TRACE) as writer:
         for s in strategies:
             variant = model.with_controller(strategy=s)
             results[s] = {}
@@ -144,9 +142,6 @@ def run_three_level(model: Model, strategies: list[str], plots: Path | None = No
             warning = _fault_warning(s, results[s])
             if warning:
                 warnings.append(warning)
-    finally:
-        if writer is not None:
-            writer.close()
     sc = model.scenario
     if sc.set == "mpdtc-table5":
         text = (f"{model.name}: steady state at 300/1800/3000 r/min, T* = {model.motor.rated_torque_nm:g} N*m, "

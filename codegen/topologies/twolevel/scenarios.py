@@ -19,8 +19,7 @@ from codegen.results import WINDOW_HEAD, fault_warning, footnotes, versions, win
 from codegen.results import clean_json as _clean
 from codegen.results import flagged_cell as flagged
 from codegen.results import fmt_cell as _fmt
-from codegen.simulator.driver import trace_fields
-from codegen.simulator.export import TraceWriter
+from codegen.simulator.export import trace_writer
 from codegen.simulator.memory import check_trace_memory
 from codegen.topologies.twolevel.hostbuild import build_host_library
 from codegen.topologies.twolevel.metrics import two_level_metrics
@@ -67,8 +66,7 @@ def run_scenarios(model: Model, strategies: list[str], plots: Path | None = None
     check_trace_memory(model, TRACE)
     results: dict[str, dict] = {}
     warnings: list[str] = []
-    writer = TraceWriter(traces, list(trace_fields(TRACE))) if traces is not None else None
-    try:
+    with trace_writer(traces, TRACE) as writer:
         for s in strategies:
             variant = model.with_controller(strategy=s)
             log(f"simulate {model.name} / {s}: {model.scenario.duration_s:g} s scenario")
@@ -87,9 +85,6 @@ def run_scenarios(model: Model, strategies: list[str], plots: Path | None = None
             if warning:
                 warnings.append(warning)
             results[s] = m
-    finally:
-        if writer is not None:
-            writer.close()
     text = (f"{model.name}: {model.scenario.duration_s:g} s scenario, dt {model.controller.dt_s * 1e6:g} us "
             f"(MPTC paper Table 9 layout; RMSE, f_ave, Cal_ave over the whole run, THD over the last "
             f"{model.scenario.window_s:g} s window with nonzero speed, its steady state checked)\n"

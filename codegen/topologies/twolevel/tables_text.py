@@ -14,16 +14,7 @@ import numpy as np
 
 from codegen.model import Model
 from codegen.topologies.twolevel import published as pub
-from codegen.topologies.twolevel.utilisation import (
-    compare_tables,
-    format_comparison,
-    format_switch_table,
-    format_utilisation,
-    published_derivation_report,
-    published_tables,
-    published_utilisation,
-    utilisation_percent,
-)
+from codegen.topologies.twolevel import utilisation as ut
 from codegen.topologies.twolevel.vectors import VEC_TO_SW, unit_vectors
 
 _S2_TITLES = ("Table 3 layout: utilisation, dT > eps_T", "Table 4 layout: utilisation, dT < -eps_T")
@@ -47,7 +38,7 @@ def vector_set_text() -> str:
 def _utilisation_block(percent: np.ndarray, titles: tuple[str, ...]) -> list[str]:
     out = []
     for c, title in enumerate(titles):
-        out += [format_utilisation(percent[c].T, title), ""]
+        out += [ut.format_utilisation(percent[c].T, title), ""]
     return out
 
 
@@ -57,9 +48,9 @@ def two_level_tables_text(model: Model, source: str, log: Callable[[str], None])
     parts = [vector_set_text(), ""]
     if source == "published":
         parts += ["Seed's published utilisation (eta_V, %):", ""]
-        parts += _utilisation_block(published_utilisation("s2"), _S2_TITLES)
-        parts += _utilisation_block(published_utilisation("s3"), _S3_TITLES)
-        parts.append(published_derivation_report(d.coverage, d.max_active)[0])
+        parts += _utilisation_block(ut.published_utilisation("s2"), _S2_TITLES)
+        parts += _utilisation_block(ut.published_utilisation("s3"), _S3_TITLES)
+        parts.append(ut.published_derivation_report(d.coverage, d.max_active)[0])
         return "\n".join(parts)
     from codegen.topologies.twolevel.switch_tables import derived_tables
 
@@ -67,8 +58,8 @@ def two_level_tables_text(model: Model, source: str, log: Callable[[str], None])
     s2, s3, counts = derived_tables(model, progress=lambda f: log(f"  training {f:5.0%}"))
     n2 = int(counts["s2"].sum())
     parts += [f"Utilisation from the training run ({n2} samples with |dT| > eps_T = {model.controller.eps_t_nm} N*m):", ""]
-    parts += _utilisation_block(utilisation_percent(counts["s2"]), _S2_TITLES)
-    parts += _utilisation_block(utilisation_percent(counts["s3"]), _S3_TITLES)
+    parts += _utilisation_block(ut.utilisation_percent(counts["s2"]), _S2_TITLES)
+    parts += _utilisation_block(ut.utilisation_percent(counts["s3"]), _S3_TITLES)
     from codegen.topologies.twolevel.switch_tables import MIN_CELL_SAMPLES, thin_cells
 
     for k in ("s2", "s3"):
@@ -76,11 +67,11 @@ def two_level_tables_text(model: Model, source: str, log: Callable[[str], None])
         if len(thin):
             cells = ", ".join(f"condition {c + 1} sector {s + 1}" for c, s in thin)
             parts += [f"{k}: {len(thin)} cells have < {MIN_CELL_SAMPLES} active choices and take the set derived from the paper's own data: {cells}", ""]
-    parts += [f"s2 derived (coverage {d.coverage:.2f}, max_active {d.max_active}):", format_switch_table(s2, "s2"), ""]
-    parts += ["s2 vs the paper's published table:", format_comparison(compare_tables(s2, pub.PUBLISHED_S2), "s2"), ""]
-    parts += ["s3 derived:", format_switch_table(s3, "s3"), ""]
+    parts += [f"s2 derived (coverage {d.coverage:.2f}, max_active {d.max_active}):", ut.format_switch_table(s2, "s2"), ""]
+    parts += ["s2 vs the paper's published table:", ut.format_comparison(ut.compare_tables(s2, pub.PUBLISHED_S2), "s2"), ""]
+    parts += ["s3 derived:", ut.format_switch_table(s3, "s3"), ""]
     parts += ["s3 row dT>0,dpsi>0 vs the paper's published row:",
-              format_comparison(compare_tables((s3[0],), (pub.PUBLISHED_S3_ROW,)), "s3")]
+              ut.format_comparison(ut.compare_tables((s3[0],), (pub.PUBLISHED_S3_ROW,)), "s3")]
     return "\n".join(parts)
 
 
@@ -95,12 +86,12 @@ def two_level_tables_rows(model: Model, source: str, log: Callable[[str], None])
          "alpha_pu": float(ux[v]), "beta_pu": float(uy[v])} for v, sw in enumerate(VEC_TO_SW)]
     d = model.controller.derivation
     if source == "published":
-        percent = {"s2": published_utilisation("s2"), "s3": published_utilisation("s3")}
-        s2, s3 = published_tables(d.coverage, d.max_active)
+        percent = {"s2": ut.published_utilisation("s2"), "s3": ut.published_utilisation("s3")}
+        s2, s3 = ut.published_tables(d.coverage, d.max_active)
     else:
         log(f"training run: conventional controller over the {model.scenario.duration_s:g} s scenario")
         s2, s3, counts = derived_tables(model, progress=lambda f: log(f"  training {f:5.0%}"))
-        percent = {k: utilisation_percent(v) for k, v in counts.items()}
+        percent = {k: ut.utilisation_percent(v) for k, v in counts.items()}
     for kind, table in (("s2", s2), ("s3", s3)):
         for c, row in enumerate(table):
             for sec, cell in enumerate(row):

@@ -11,7 +11,7 @@ from codegen.simulator.driver import SimulationError
 from codegen.topologies.ttype.metrics import leg_level_changes
 from codegen.topologies.ttype.records import INPUT_DTYPE
 from codegen.topologies.ttype.sim import controller_inputs, params_from_model, run_closed_loop
-from tests.fixtures.simbuild import assert_traces_identical
+from tests.fixtures.simbuild import assert_traces_identical, echo_mode
 
 from .conftest import seed000_model
 
@@ -30,11 +30,8 @@ def test_chunked_equals_one_long_run(stub):
 def test_one_step_delay_timing(stub):
     ffi, lib, mode = stub
     mode(63)
-    lib.stub_ttype_set_echo(5)  # te_est_nm = prev_vector as the step saw it
-    try:
+    with echo_mode(lib.stub_ttype_set_echo, 5):  # te_est_nm = prev_vector as the step saw it
         tr = run_closed_loop(ffi, lib, seed000_model(1800.0, 0.05))
-    finally:
-        lib.stub_ttype_set_echo(0)
     prev = np.concatenate(([13], tr.vector[:-1]))
     np.testing.assert_array_equal(tr.te_est_nm, prev.astype(np.float32))
     # the decision of k is applied during [k+1, k+2)
@@ -57,11 +54,8 @@ def test_controller_inputs_are_what_the_step_saw(stub, echo, fields):
     ffi, lib, mode = stub
     mode(63)
     model = seed000_model(3000.0, 0.05, imposed=False, load_steps=((0.0, 0.5),))
-    lib.stub_ttype_set_echo(echo)
-    try:
+    with echo_mode(lib.stub_ttype_set_echo, echo):
         tr = run_closed_loop(ffi, lib, model)
-    finally:
-        lib.stub_ttype_set_echo(0)
     rec = controller_inputs(tr, model)
     assert rec.shape == (tr.n,) and set(rec.dtype.names) >= set(INPUT_DTYPE.names)
     assert rec[fields[0]].tobytes() == tr.te_est_nm.tobytes()

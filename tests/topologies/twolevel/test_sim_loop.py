@@ -12,7 +12,7 @@ from codegen.metrics import steady_windows, window_slice
 from codegen.simulator.driver import SimulationError, default_substeps, n_periods, scenario_arrays
 from codegen.topologies.twolevel.records import INPUT_DTYPE
 from codegen.topologies.twolevel.sim import Trace, controller_inputs, params_from_model, run_closed_loop
-from tests.fixtures.simbuild import assert_traces_identical
+from tests.fixtures.simbuild import assert_traces_identical, echo_mode
 
 RPM = 2 * math.pi / 60
 
@@ -87,8 +87,7 @@ def test_chunked_equals_one_long_run(stub, spmsm_model, full_run):
 
 def test_delay_compensation_timing(stub, spmsm_model):
     ffi, lib = stub
-    lib.stub_twolevel_set_echo(4)  # te_est_nm = prev_sw as the step saw it
-    try:
+    with echo_mode(lib.stub_twolevel_set_echo, 4):  # te_est_nm = prev_sw as the step saw it
         for dc in (False, True):
             tr = run_closed_loop(ffi, lib, _short(spmsm_model, 0.05, delay_compensation=dc))
             prev = np.concatenate(([0], tr.sw[:-1]))
@@ -98,8 +97,6 @@ def test_delay_compensation_timing(stub, spmsm_model):
             else:
                 np.testing.assert_array_equal(tr.applied_sw, tr.sw)
             assert len(set(tr.sw.tolist())) > 3
-    finally:
-        lib.stub_twolevel_set_echo(0)
 
 
 @pytest.mark.parametrize("mode,fields", [(1, ("torque_ref_nm", "omega_e_rad_s")),
@@ -108,11 +105,8 @@ def test_delay_compensation_timing(stub, spmsm_model):
 def test_controller_inputs_are_what_the_step_saw(stub, spmsm_model, mode, fields):
     ffi, lib = stub
     model = _short(spmsm_model, 0.1)
-    lib.stub_twolevel_set_echo(mode)
-    try:
+    with echo_mode(lib.stub_twolevel_set_echo, mode):
         tr = run_closed_loop(ffi, lib, model)
-    finally:
-        lib.stub_twolevel_set_echo(0)
     rec = controller_inputs(tr, model)
     assert rec.dtype == INPUT_DTYPE and rec.shape == (tr.n,)
     assert rec[fields[0]].tobytes() == tr.te_est_nm.tobytes()

@@ -173,6 +173,13 @@ static unsigned applied_changes(const ttype_sim_state_t *state, int *last)
     return changes;
 }
 
+/* The plant at the sample instant of period state->common.k. */
+static void plant_load(const ttype_sim_state_t *state, ttype_plant_state_t *x)
+{
+    x->motor = state->common.motor;
+    x->vo_v = state->vo_v;
+}
+
 /* Steps 1.-4. (inputs) of the period at state->common.k; x: the plant (step 1 may set its speed). */
 static void period_input(const ttype_sim_params_t *p, const ttype_sim_state_t *state,
                          ttype_plant_state_t *x, double w_ref, double load, sim_sample_t *v,
@@ -247,81 +254,5 @@ static int period_finish(const ttype_sim_params_t *p, ttype_sim_state_t *state,
     return 0;
 }
 
-int ttype_sim_run(const ttype_sim_params_t *p, const double *speed_ref_rad_s, const double *load_nm,
-                  long n, ttype_sim_trace_t *trace, ttype_sim_state_t *state)
-{
-    ttype_plant_state_t x;
-    ttype_sim_trace_t tr;
-    long j;
-
-    if (!params_valid(p) || state == NULL
-        || !sim_period_args_valid(&state->common, n, speed_ref_rad_s, load_nm) || !state_valid(state)) {
-        return -1;
-    }
-    if (trace != NULL) {
-        tr = *trace;
-    } else {
-        memset(&tr, 0, sizeof tr);
-    }
-    x.motor = state->common.motor;
-    x.vo_v = state->vo_v;
-
-    for (j = 0; j < n; ++j) {
-        mpc_input_t in;
-        mpc_output_t out;
-        sim_sample_t v;
-        int rc;
-
-        period_input(p, state, &x, speed_ref_rad_s[j], load_nm[j], &v, &in);
-        memset(&out, 0, sizeof out);
-        MPC_STEP(&in, &out);
-        rc = period_finish(p, state, &x, &v, &out, &tr, j);
-        if (rc != 0) {
-            return rc;
-        }
-    }
-    return 0;
-}
-
-static int hil_args_valid(const ttype_sim_params_t *p, const ttype_sim_state_t *state)
-{
-    return params_valid(p) && state != NULL && state->common.k >= 0 && state_valid(state);
-}
-
-int ttype_sim_hil_input(const ttype_sim_params_t *p, const ttype_sim_state_t *state,
-                        double speed_ref_rad_s, double load_nm, void *in)
-{
-    ttype_plant_state_t x;
-    sim_sample_t v;
-
-    if (!hil_args_valid(p, state) || in == NULL) {
-        return -1;
-    }
-    x.motor = state->common.motor;
-    x.vo_v = state->vo_v;
-    period_input(p, state, &x, speed_ref_rad_s, load_nm, &v, (mpc_input_t *)in);
-    return 0;
-}
-
-int ttype_sim_hil_finish(const ttype_sim_params_t *p, ttype_sim_state_t *state,
-                         double speed_ref_rad_s, double load_nm, const void *out,
-                         const ttype_sim_trace_t *trace, long j)
-{
-    ttype_sim_trace_t tr;
-    ttype_plant_state_t x;
-    mpc_input_t in;
-    sim_sample_t v;
-
-    if (!hil_args_valid(p, state) || out == NULL || j < 0) {
-        return -1;
-    }
-    if (trace != NULL) {
-        tr = *trace;
-    } else {
-        memset(&tr, 0, sizeof tr);
-    }
-    x.motor = state->common.motor;
-    x.vo_v = state->vo_v;
-    period_input(p, state, &x, speed_ref_rad_s, load_nm, &v, &in);
-    return period_finish(p, state, &x, &v, (const mpc_output_t *)out, &tr, j);
-}
+/* ttype_sim_run, ttype_sim_hil_input and ttype_sim_hil_finish (sim_period.h) */
+SIM_PERIOD_ENTRY_POINTS(ttype_sim, ttype_plant_state_t)

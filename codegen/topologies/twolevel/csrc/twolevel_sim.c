@@ -57,6 +57,18 @@ int twolevel_sim_init(const twolevel_sim_params_t *p, twolevel_sim_state_t *stat
     return 0;
 }
 
+/* The carried decision is a switching state 0..7. */
+static int state_valid(const twolevel_sim_state_t *state)
+{
+    return state->prev_sw >= 0 && state->prev_sw <= 7;
+}
+
+/* The plant at the sample instant of period state->common.k. */
+static void plant_load(const twolevel_sim_state_t *state, pmsm_state_t *x)
+{
+    *x = state->common.motor;
+}
+
 /* Steps 1.-4. (inputs) of the period at state->common.k; x: the plant (step 1 may set its speed). */
 static void period_input(const twolevel_sim_params_t *p, const twolevel_sim_state_t *state,
                          pmsm_state_t *x, double w_ref, double load, sim_sample_t *v,
@@ -102,81 +114,5 @@ static int period_finish(const twolevel_sim_params_t *p, twolevel_sim_state_t *s
     return 0;
 }
 
-static int run_args_valid(const twolevel_sim_params_t *p, const twolevel_sim_state_t *state)
-{
-    return params_valid(p) && state != NULL && state->common.k >= 0 && state->prev_sw >= 0
-           && state->prev_sw <= 7;
-}
-
-int twolevel_sim_run(const twolevel_sim_params_t *p, const double *speed_ref_rad_s,
-                     const double *load_nm, long n, twolevel_sim_trace_t *trace,
-                     twolevel_sim_state_t *state)
-{
-    twolevel_sim_trace_t tr;
-    pmsm_state_t x;
-    long j;
-
-    if (!params_valid(p) || state == NULL
-        || !sim_period_args_valid(&state->common, n, speed_ref_rad_s, load_nm)
-        || state->prev_sw < 0 || state->prev_sw > 7) {
-        return -1;
-    }
-    if (trace != NULL) {
-        tr = *trace;
-    } else {
-        memset(&tr, 0, sizeof tr);
-    }
-    x = state->common.motor;
-
-    for (j = 0; j < n; ++j) {
-        mpc_input_t in;
-        mpc_output_t out;
-        sim_sample_t v;
-        int rc;
-
-        period_input(p, state, &x, speed_ref_rad_s[j], load_nm[j], &v, &in);
-        memset(&out, 0, sizeof out);
-        MPC_STEP(&in, &out);
-        rc = period_finish(p, state, &x, &v, &out, &tr, j);
-        if (rc != 0) {
-            return rc;
-        }
-    }
-    return 0;
-}
-
-int twolevel_sim_hil_input(const twolevel_sim_params_t *p, const twolevel_sim_state_t *state,
-                           double speed_ref_rad_s, double load_nm, void *in)
-{
-    pmsm_state_t x;
-    sim_sample_t v;
-
-    if (!run_args_valid(p, state) || in == NULL) {
-        return -1;
-    }
-    x = state->common.motor;
-    period_input(p, state, &x, speed_ref_rad_s, load_nm, &v, (mpc_input_t *)in);
-    return 0;
-}
-
-int twolevel_sim_hil_finish(const twolevel_sim_params_t *p, twolevel_sim_state_t *state,
-                            double speed_ref_rad_s, double load_nm, const void *out,
-                            const twolevel_sim_trace_t *trace, long j)
-{
-    twolevel_sim_trace_t tr;
-    mpc_input_t in;
-    pmsm_state_t x;
-    sim_sample_t v;
-
-    if (!run_args_valid(p, state) || out == NULL || j < 0) {
-        return -1;
-    }
-    if (trace != NULL) {
-        tr = *trace;
-    } else {
-        memset(&tr, 0, sizeof tr);
-    }
-    x = state->common.motor;
-    period_input(p, state, &x, speed_ref_rad_s, load_nm, &v, &in);
-    return period_finish(p, state, &x, &v, (const mpc_output_t *)out, &tr, j);
-}
+/* twolevel_sim_run, twolevel_sim_hil_input and twolevel_sim_hil_finish (sim_period.h) */
+SIM_PERIOD_ENTRY_POINTS(twolevel_sim, pmsm_state_t)
