@@ -22,13 +22,18 @@ def _run(capsys, *argv: str) -> tuple[int, str, str]:
     return rc, out.out, out.err
 
 
-def test_window_with_startup_is_flagged(tmp_path, capsys):
+def _conventional(capsys, tmp_path, duration_s: float, window_s: float) -> tuple[dict, dict, str]:
+    """The servo's conventional run: its metrics, the THD window entry and the printed table."""
     js = tmp_path / "s.json"
-    rc, out, _ = _run(capsys, str(SERVO), *SHORT, "--set", "scenario.duration_s=0.1",
-                      "--set", "scenario.window_s=0.1", "--json", str(js))
+    rc, out, _ = _run(capsys, str(SERVO), *SHORT, "--set", f"scenario.duration_s={duration_s}",
+                      "--set", f"scenario.window_s={window_s}", "--json", str(js))
     assert rc == 0
     m = json.loads(js.read_text())["strategies"]["conventional"]
-    w = m["window"]["THD_ia_percent"]
+    return m, m["window"]["THD_ia_percent"], out
+
+
+def test_window_with_startup_is_flagged(tmp_path, capsys):
+    m, w, out = _conventional(capsys, tmp_path, 0.1, 0.1)
     assert w["steady"] is False and "start-up" in w["not_steady_reason"]
     assert "THD_ia_percent" in m["not_steady"] and "T_rip_std_nm" in m["not_steady"]
     assert m["window"]["ripple_std_pp"]["steady"] is False
@@ -39,12 +44,7 @@ def test_window_with_startup_is_flagged(tmp_path, capsys):
 
 
 def test_settled_window_is_not_flagged(tmp_path, capsys):
-    js = tmp_path / "s.json"
-    rc, out, _ = _run(capsys, str(SERVO), *SHORT, "--set", "scenario.duration_s=0.4",
-                      "--set", "scenario.window_s=0.1", "--json", str(js))
-    assert rc == 0
-    m = json.loads(js.read_text())["strategies"]["conventional"]
-    w = m["window"]["THD_ia_percent"]
+    m, w, out = _conventional(capsys, tmp_path, 0.4, 0.1)
     assert w["steady"] is True and m["not_steady"] == {} and m["not_computed"] == {}
     assert w["t0_s"] == 0.3 and w["n_periods"] in (19, 20) and abs(w["f1_hz"] - 200.0) < 2.0
     assert "*" not in next(line for line in out.splitlines() if line.startswith("conventional"))

@@ -30,15 +30,15 @@ def report_text(model: Model, t: ThreeLevelTables, target: str) -> str:
     tables += ["", f"## Candidate rows ({len(t.row_groups)})", ""]
     tables += [f"- row {i}: {label}: " + " ".join(t.group_labels[g] for g in r)
                for i, (r, label) in enumerate(zip(t.row_groups, t.row_labels))]
-    return rp.document(
-        model, target, "T-type three-level MPDTC",
-        f"strategy `{c.strategy}`, lambda_psi {c.lambda_psi_nm_per_wb:g} N*m/Wb, "
-        f"lambda_vo {c.lambda_vo_nm_per_v:g} N*m/V, one-step delay compensation",
-        t.consts, tables, table_bytes(t), FAULT_BITS, "OOO for the whole period", [
-            "Ld = Lq = Ls (surface PMSM); forward-Euler dq prediction k -> k+1 under the applied vector "
-            "(delay compensation), candidates evaluated at k+2.",
-            "flux reference psi* by MTPA from T*; deadbeat reference voltage u* picks the 63-MPDTC row.",
-            "a group's members are resolved by the smallest predicted |V_o(k+2)|; a virtual member's T_N "
-            "is the neutral-point deadbeat, clamped to [T_N_min, Ts/3].",
-            "sin/cos: generated polynomial, |error| < 2e-7 for |theta_e| <= 256 rad.",
-        ])
+    settings = (f"strategy `{c.strategy}`, lambda_psi {c.lambda_psi_nm_per_wb:g} N*m/Wb, "
+                f"lambda_vo {c.lambda_vo_nm_per_v:g} N*m/V, one-step delay compensation")
+    assumptions = [
+        "Ld = Lq = Ls (surface PMSM); forward-Euler dq prediction k -> k+1 under the applied vector "
+        "(delay compensation), candidates evaluated at k+2.",
+        "flux reference psi* by MTPA from T*; deadbeat reference voltage u* picks the 63-MPDTC row.",
+        "a group's members are resolved by the smallest predicted |V_o(k+2)|; a virtual member's T_N "
+        "is the neutral-point deadbeat, clamped to [T_N_min, Ts/3].",
+        "sin/cos: generated polynomial, |error| < 2e-7 for |theta_e| <= 256 rad.",
+    ]
+    return rp.document(model, target, "T-type three-level MPDTC", settings, t.consts, tables, table_bytes(t),
+                       FAULT_BITS, "OOO for the whole period", assumptions)
