@@ -52,7 +52,7 @@ def cmd_hil(args: argparse.Namespace) -> int:
     cliargs.at_least("--retries", args.retries, 0)
     cliargs.at_least("--batch", args.batch, 1)
     cliargs.at_least("--baud", args.baud, 1)
-    if not args.timeout > 0:
+    if args.timeout is not None and not args.timeout > 0:
         raise UsageError(f"--timeout = {args.timeout}: must be a number of seconds > 0")
     cliargs.output_file("--json", args.json)
     model = base._load(args)

@@ -29,9 +29,11 @@ if [ ! -x .venv/bin/python ]; then
   "$PY" -m venv .venv
 fi
 stamp=.venv/.mpcgen-installed
-if [ ! -f "$stamp" ] || [ pyproject.toml -nt "$stamp" ]; then
-  echo "bootstrap: pip install -e .[test]" >&2
+# A regular (not editable) install: setuptools warns about every editable mode.  Reinstalled
+# whenever a file of the package is newer than the last install, so .venv/bin/mpcgen is current.
+if [ ! -f "$stamp" ] || [ -n "$(find pyproject.toml codegen templates firmware hil -newer "$stamp" -print -quit)" ]; then
+  echo "bootstrap: pip install .[test]" >&2
   .venv/bin/python -m pip install -q --upgrade pip "setuptools>=68" wheel
-  .venv/bin/python -m pip install -q -e ".[test]"
+  .venv/bin/python -m pip install -q ".[test]"
   touch "$stamp"
 fi
