@@ -7,6 +7,7 @@ unchanged.
 
     mpcgen hil CONFIG [--port URL | --board virtual|qemu-m7] --mode replay --states N --json FILE
     mpcgen hil CONFIG [--port URL | --board ...] --mode closed-loop --json FILE
+    mpcgen hil CONFIG [--port URL | --board ...] --mode onboard [--decimation N] --json FILE
 
 Exit codes as codegen.cli: 0 every state answered and equal, 1 mismatches,
 lost states or a board error, 2 bad input (one line, checked before any long
@@ -25,7 +26,7 @@ from codegen.errors import MpcgenError, UsageError
 
 __all__ = ["build_parser", "main", "cmd_hil"]
 
-MODES = ("replay", "closed-loop")
+MODES = ("replay", "closed-loop", "onboard")
 
 
 def cmd_hil(args: argparse.Namespace) -> int:
@@ -52,6 +53,7 @@ def cmd_hil(args: argparse.Namespace) -> int:
     cliargs.at_least("--retries", args.retries, 0)
     cliargs.at_least("--batch", args.batch, 1)
     cliargs.at_least("--baud", args.baud, 1)
+    cliargs.at_least("--decimation", args.decimation, 1)
     if args.timeout is not None and not args.timeout > 0:
         raise UsageError(f"--timeout = {args.timeout}: must be a number of seconds > 0")
     cliargs.output_file("--json", args.json)
@@ -67,6 +69,15 @@ def cmd_hil(args: argparse.Namespace) -> int:
             open_board(model, None, args.port).__enter__().close()
         except (serial.SerialException, OSError, ValueError) as exc:
             raise UsageError(f"--port = {args.port!r}: cannot open it ({exc})") from None
+    if args.mode == "onboard":
+        from codegen.simulator.driver import scenario_arrays
+
+        from .onboard import profile_steps
+        from .schema import MAX_STEPS
+        steps = profile_steps(*scenario_arrays(model))
+        if len(steps) > MAX_STEPS:
+            raise UsageError(f"--mode onboard: the scenario has {len(steps)} speed/load steps, SETPOINTS takes at "
+                             f"most {MAX_STEPS}")
     tables = topology_of(model).derive(model)
     sets = replay_states(model, tables, args.states, args.seed) if args.mode == "replay" else {}
     try:
@@ -79,6 +90,8 @@ def cmd_hil(args: argparse.Namespace) -> int:
                 f"{info.core_clock_hz} Hz, cycles in {info.cycle_unit}, max batch {info.max_batch}")
             if args.mode == "replay":
                 data = replay(session, model, tables, sets, show_progress=not args.quiet, log=log)
+            elif args.mode == "onboard":
+                return _onboard_mode(args, session, model, tables, log)
             else:
                 return _loop_mode(args, session, model, tables, log)
     except serial.SerialException as exc:
@@ -96,6 +109,16 @@ def _loop_mode(args: argparse.Namespace, session: Any, model: Any, tables: Any, 
     from .closedloop import closed_loop, summary_line
 
     data = closed_loop(session, model, tables, show_progress=not args.quiet, log=log)
+    print(summary_line(data))
+    base._write_json(args.json, data)
+    return base.EXIT_OK if data["ok"] else base.EXIT_FAIL
+
+
+def _onboard_mode(args: argparse.Namespace, session: Any, model: Any, tables: Any, log: Any) -> int:
+    """Mode onboard: run, print one line, write the JSON; the exit code."""
+    from .onboard import onboard, summary_line
+
+    data = onboard(session, model, tables, decimation=args.decimation, show_progress=not args.quiet, log=log)
     print(summary_line(data))
     base._write_json(args.json, data)
     return base.EXIT_OK if data["ok"] else base.EXIT_FAIL
@@ -119,7 +142,11 @@ def build_parser() -> argparse.ArgumentParser:
     h.add_argument("--mode", choices=MODES, default="replay",
                    help="replay: recorded closed-loop, random and adversarial states compared bit for bit; "
                         "closed-loop: the host simulates the plant, the board decides every period (the "
-                        "decisions must equal mpcgen simulate's)")
+                        "decisions must equal mpcgen simulate's); onboard: the board runs a float32 plant and "
+                        "the controller at full rate on the scenario's speed/load steps, its telemetry metrics "
+                        "are compared with mpcgen simulate's within a stated tolerance")
+    h.add_argument("--decimation", type=int, default=1,
+                   help="mode onboard: one telemetry sample every N periods (default 1)")
     h.add_argument("--states", type=int, default=2000, help="states of each source (default 2000)")
     h.add_argument("--seed", type=int, default=1, help="seed of the random states (default 1)")
     h.add_argument("--timeout", type=float, default=None,

@@ -5,10 +5,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .schema import MAX_FRAME, PROTOCOL_VERSION, Err, Schema, hash_words, text_words, words_hash, words_text
+from .schema import MAX_FRAME, MAX_STEPS, PROTOCOL_VERSION, Err, Schema, hash_words, text_words, words_hash, words_text
 
 __all__ = ["BoardInfo", "ErrorReport", "info_payload", "parse_info", "batch_payload", "step_payload",
-           "parse_error", "split_results", "ProtocolError"]
+           "parse_error", "split_results", "ProtocolError", "setpoints_payload", "parse_telemetry",
+           "parse_onboard_end", "OnboardEnd"]
 
 
 class ProtocolError(Exception):
@@ -105,3 +106,56 @@ def split_results(schema: Schema, payloads: np.ndarray) -> tuple[np.ndarray, np.
     heads = np.ascontiguousarray(payloads[:, :k]).view(schema.result_head.packed_dtype).reshape(-1)
     outs = schema.output.unpack(np.ascontiguousarray(payloads[:, k:]).tobytes(), len(payloads))
     return heads["cycles"].astype(np.int64), outs
+
+
+def setpoints_payload(schema: Schema, periods: int, decimation: int,
+                      steps: list[tuple[int, float, float]]) -> bytes:
+    """A SETPOINTS payload: run ``periods`` periods, a sample every ``decimation``; ``steps``: (period index,
+    mechanical speed reference rad/s, load N*m), the first at period 0, increasing, at most MAX_STEPS."""
+    if not 1 <= len(steps) <= MAX_STEPS:
+        raise ValueError(f"{len(steps)} profile steps: the protocol takes 1 to {MAX_STEPS}")
+    rec = schema.setpoints.zeros(1)
+    rec["periods"], rec["decimation"], rec["n_steps"] = periods, decimation, len(steps)
+    k = np.zeros(MAX_STEPS, np.int64)
+    w = np.zeros(MAX_STEPS)
+    load = np.zeros(MAX_STEPS)
+    for i, (ki, wi, li) in enumerate(steps):
+        k[i], w[i], load[i] = ki, wi, li
+    rec["step_k"], rec["speed_rad_s"], rec["load_nm"] = k, w, load
+    return schema.setpoints.pack(rec).tobytes()
+
+
+def parse_telemetry(schema: Schema, payload: bytes) -> np.ndarray:
+    """The samples of a TELEMETRY payload (a record array of ``schema.sample``)."""
+    k = schema.telemetry_head.packed_dtype.itemsize
+    w = schema.sample.packed_dtype.itemsize
+    if len(payload) < k:
+        raise ProtocolError(f"TELEMETRY: {len(payload)} octets")
+    count = int.from_bytes(payload[:2], "little")
+    if len(payload) != k + count * w:
+        raise ProtocolError(f"TELEMETRY: {len(payload)} octets for {count} samples, expected {k + count * w}")
+    return schema.sample.unpack(payload[k:], count)
+
+
+@dataclass(frozen=True)
+class OnboardEnd:
+    """The end of an on-board run (ONBOARD_END)."""
+
+    periods: int
+    samples: int
+    status: int
+    changes: int
+    cycles_min: int
+    cycles_max: int
+    cycles_sum: int
+    hist: list[int]
+    hist_width: int
+
+
+def parse_onboard_end(schema: Schema, payload: bytes) -> OnboardEnd:
+    """An ONBOARD_END message's record."""
+    r = _one(schema, "onboard_end", payload)
+    return OnboardEnd(int(r["periods"]), int(r["samples"]), int(r["status"]), int(r["changes"]),
+                      int(r["cycles_min"]), int(r["cycles_max"]),
+                      sum(int(x) << (16 * i) for i, x in enumerate(r["cycles_sum"])),
+                      [int(x) for x in r["hist"]], int(r["hist_width"]))

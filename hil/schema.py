@@ -26,7 +26,7 @@ from codegen.numfmt import number_format
 from codegen.records import Record, RecordLayout, fields
 from codegen.topology import topology_of
 
-__all__ = ["PROTOCOL_VERSION", "MAX_FRAME", "MAX_BATCH", "Msg", "Err", "HEADER_RECORDS", "Schema",
+__all__ = ["PROTOCOL_VERSION", "MAX_FRAME", "MAX_BATCH", "MAX_STEPS", "TELEMETRY_SAMPLES", "Msg", "Err", "HEADER_RECORDS", "Schema",
            "hash_words", "words_hash", "text_words", "words_text"]
 
 #: protocol version (bump on any change the schema hash does not see)
@@ -52,6 +52,9 @@ class Msg(IntEnum):
     PONG = 7    # board -> host, the PING's payload
     RESET = 8   # host -> board, empty: the protocol restarts, the board announces INFO
     ERROR = 9   # board -> host, error record
+    SETPOINTS = 10   # host -> board, setpoints record: run plant and controller on board (mode onboard)
+    TELEMETRY = 11   # board -> host, telemetry head + count samples (seq: SETPOINTS seq + frame index + 1)
+    ONBOARD_END = 12  # board -> host, end-of-run record (seq of the SETPOINTS)
 
 
 class Err(IntEnum):
@@ -64,6 +67,7 @@ class Err(IntEnum):
     TYPE = 5      # unknown or board-to-host message type
     LENGTH = 6    # payload length wrong for the type
     BATCH = 7     # batch count 0 or above max_batch
+    SETPOINTS = 8  # setpoints invalid (detail: 1 periods, 2 decimation, 3 step count, 4 step order)
 
 
 #: header records (one definition; the C structs and codec are generated from them)
@@ -94,7 +98,44 @@ ERROR = Record("hil_error", fields("""
     seq     u16  1  sequence number of the offending frame (0xFFFF: unknown)
     detail  u16  1  octets received (CRC, COBS, LENGTH, OVERSIZE) or the offending type / count
 """))
-HEADER_RECORDS: tuple[Record, ...] = (FRAME_HEAD, INFO, RESULT_HEAD, BATCH_HEAD, ERROR)
+#: most piecewise-constant steps of one SETPOINTS profile
+MAX_STEPS = 8
+#: most samples of one TELEMETRY frame
+TELEMETRY_SAMPLES = 16
+SETPOINTS = Record("hil_setpoints", fields(f"""
+    periods     i32  1  control periods to run (>= 1)
+    decimation  u16  1  one telemetry sample every `decimation` periods (>= 1)
+    n_steps     u16  1  steps of the profile used (1..{MAX_STEPS}), step_k[0] == 0, increasing
+    step_k      i32  {MAX_STEPS}  period index where the step starts
+    speed_rad_s f32  {MAX_STEPS}  mechanical speed reference from that period, rad/s
+    load_nm     f32  {MAX_STEPS}  load torque from that period, N*m
+"""))
+TELEMETRY_HEAD = Record("hil_telemetry_head", fields("""
+    count  u16  1  number of samples that follow
+"""))
+TELEMETRY_SAMPLE = Record("hil_sample", fields("""
+    k            i32  1  period index of the sample instant
+    omega_m      f32  1  plant mechanical speed, rad/s
+    te_nm        f32  1  plant torque, N*m
+    torque_ref   f32  1  T* given to the controller, N*m
+    ia_a         f32  1  plant phase current a, A
+    ib_a         f32  1  plant phase current b, A
+    decision     u16  1  the controller's decision (topology's decision field)
+    fault        u16  1  the controller's fault bits
+"""))
+ONBOARD_END = Record("hil_onboard_end", fields("""
+    periods      i32  1  periods run
+    samples      i32  1  telemetry samples sent
+    status       i32  1  0 ok, < 0 the plant diverged or a decision was invalid at period `periods`
+    changes      i32  1  periods whose decision differs from the previous period's (full rate)
+    cycles_min   i32  1  fewest net cycles of a controller call
+    cycles_max   i32  1  most net cycles of a controller call
+    cycles_sum   u16  4  sum of the net cycles, 64 bits, least significant word first
+    hist         i32  8  controller calls per cycle bin: bin b counts cycles in [b*w, (b+1)*w), last bin open
+    hist_width   i32  1  bin width w (cycles)
+"""))
+HEADER_RECORDS: tuple[Record, ...] = (FRAME_HEAD, INFO, RESULT_HEAD, BATCH_HEAD, ERROR, SETPOINTS, TELEMETRY_HEAD,
+                                      TELEMETRY_SAMPLE, ONBOARD_END)
 
 
 def hash_words(hex16: str) -> list[int]:
@@ -164,15 +205,33 @@ class Schema:
     def error(self) -> RecordLayout:
         return self.header(ERROR)
 
+    @cached_property
+    def setpoints(self) -> RecordLayout:
+        return self.header(SETPOINTS)
+
+    @cached_property
+    def telemetry_head(self) -> RecordLayout:
+        return self.header(TELEMETRY_HEAD)
+
+    @cached_property
+    def sample(self) -> RecordLayout:
+        return self.header(TELEMETRY_SAMPLE)
+
+    @cached_property
+    def onboard_end(self) -> RecordLayout:
+        return self.header(ONBOARD_END)
+
     @property
     def layouts(self) -> tuple[RecordLayout, ...]:
         """Every message layout, header records first."""
-        return (self.head, self.info, self.result_head, self.batch_head, self.error, self.input, self.output)
+        return (self.head, self.info, self.result_head, self.batch_head, self.error, self.setpoints,
+                self.telemetry_head, self.sample, self.onboard_end, self.input, self.output)
 
     @cached_property
     def schema_hash(self) -> str:
         """SHA-256 (hex, 16 chars) of the protocol version, the limits, the codes and every layout hash."""
-        parts = [f"v{PROTOCOL_VERSION}", f"frame{MAX_FRAME}", f"batch{MAX_BATCH}",
+        parts = [f"v{PROTOCOL_VERSION}", f"frame{MAX_FRAME}", f"batch{MAX_BATCH}", f"steps{MAX_STEPS}",
+                 f"telemetry{TELEMETRY_SAMPLES}",
                  ",".join(f"{m.name}={m.value}" for m in Msg), ",".join(f"{e.name}={e.value}" for e in Err)]
         parts += [f"{lay.record.name}:{lay.layout_hash}" for lay in self.layouts]
         return hashlib.sha256(";".join(parts).encode()).hexdigest()[:16]

@@ -45,7 +45,8 @@ ARM_CFLAGS = ("-mcpu=cortex-m7", "-mthumb", "-mfpu=fpv5-d16", "-mfloat-abi=hard"
               "-Wdouble-promotion", "-Werror", "-fstack-usage", "-fcallgraph-info=su",
               "-ffunction-sections", "-fdata-sections", "-g")
 #: runtime files of the serial protocol (serial protocol builds only)
-PROTOCOL_RUNTIME_FILES = ("hil_proto.c", "hil_proto.h", "hil_cobs.c", "hil_cobs.h", "hil_wire.c", "hil_wire.h")
+PROTOCOL_RUNTIME_FILES = ("hil_proto.c", "hil_proto.h", "hil_cobs.c", "hil_cobs.h", "hil_wire.c", "hil_wire.h",
+                          "onboard.c", "onboard.h")
 HOST_CFLAGS = ("-O2", "-ffp-contract=off", "-fno-math-errno", "-std=c99", "-Wall", "-Wextra",
                "-Wconversion", "-Wdouble-promotion", "-Werror", "-fstack-usage", "-g")
 

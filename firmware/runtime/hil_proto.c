@@ -7,6 +7,7 @@
 #include "hil_cobs.h"
 #include "hil_wire.h"
 #include "mpc_runtime.h"
+#include "onboard.h"
 #include "port.h"
 
 /* Octets of the frame head and the CRC trailer. */
@@ -107,6 +108,46 @@ static void step_one(const uint16_t *octets, uint16_t seq)
     send_frame(HIL_MSG_RESULT, seq, (uint16_t)(HIL_RESULT_HEAD_OCTETS + HIL_OUTPUT_OCTETS));
 }
 
+/* seq of the next TELEMETRY frame of an on-board run. */
+static uint16_t telemetry_seq;
+
+static void emit_telemetry(const hil_sample_t *samples, uint16_t n)
+{
+    hil_telemetry_head_t head;
+    uint16_t i;
+    head.count = n;
+    hil_encode_telemetry_head(&head, &tx[HIL_HEAD]);
+    for (i = 0u; i < n; ++i) {
+        hil_encode_sample(&samples[i], &tx[HIL_HEAD + HIL_TELEMETRY_HEAD_OCTETS + i * HIL_SAMPLE_OCTETS]);
+    }
+    send_frame(HIL_MSG_TELEMETRY, telemetry_seq,
+               (uint16_t)(HIL_TELEMETRY_HEAD_OCTETS + n * HIL_SAMPLE_OCTETS));
+    telemetry_seq = (uint16_t)(telemetry_seq + 1u);
+}
+
+/* SETPOINTS: run plant and controller on board (onboard.h), TELEMETRY frames
+ * (seq + 1, seq + 2, ...), then ONBOARD_END (seq). */
+static void handle_setpoints(const uint16_t *p, uint16_t n, uint16_t seq)
+{
+    static hil_setpoints_t sp;
+    static hil_onboard_end_t end;
+    uint16_t bad;
+    if (n != HIL_SETPOINTS_OCTETS) {
+        send_error(HIL_ERR_LENGTH, seq, n);
+        return;
+    }
+    hil_decode_setpoints(p, &sp);
+    bad = onboard_check(&sp);
+    if (bad != 0u) {
+        send_error(HIL_ERR_SETPOINTS, seq, bad);
+        return;
+    }
+    telemetry_seq = (uint16_t)(seq + 1u);
+    onboard_run(&sp, overhead, emit_telemetry, &end);
+    hil_encode_onboard_end(&end, &tx[HIL_HEAD]);
+    send_frame(HIL_MSG_ONBOARD_END, seq, HIL_ONBOARD_END_OCTETS);
+}
+
 static void restart(void)
 {
     rx_len = 0u;
@@ -168,6 +209,9 @@ static void handle_frame(uint16_t n)
         break;
     case HIL_MSG_BATCH:
         handle_batch(p, plen, head.seq);
+        break;
+    case HIL_MSG_SETPOINTS:
+        handle_setpoints(p, plen, head.seq);
         break;
     case HIL_MSG_PING:
         for (i = 0u; i < plen; ++i) {
