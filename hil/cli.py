@@ -16,6 +16,7 @@ run).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
 from collections.abc import Sequence
 from typing import Any
@@ -57,8 +58,11 @@ def cmd_hil(args: argparse.Namespace) -> int:
     if args.timeout is not None and not args.timeout > 0:
         raise UsageError(f"--timeout = {args.timeout}: must be a number of seconds > 0")
     cliargs.output_file("--json", args.json)
+    log_path = cliargs.output_file("--log", args.log)
     model = base._load(args)
     schema = Schema.of(model)
+    if args.check_log is not None:
+        return _check_log(args, model)
     try:
         schema.max_batch  # noqa: B018 -- the records must fit a frame
     except ValueError as exc:
@@ -81,7 +85,16 @@ def cmd_hil(args: argparse.Namespace) -> int:
     tables = topology_of(model).derive(model)
     sets = replay_states(model, tables, args.states, args.seed) if args.mode == "replay" else {}
     try:
-        with open_board(model, tables, args.port, board=args.board, baudrate=args.baud) as link:
+        with open_board(model, tables, args.port, board=args.board, baudrate=args.baud) as board_link, \
+                contextlib.ExitStack() as stack:
+            link: Any = board_link
+            if log_path is not None:  # every octet both ways, for `mpcgen hil --check-log`
+                from .exchange_log import LoggingLink
+
+                header = {"config": str(args.config), "sets": args.sets, "config_hash": schema.config_hash,
+                          "schema_hash": schema.schema_hash, "strategy": model.controller.strategy,
+                          "board": args.port or args.board or VIRTUAL, "mode": args.mode}
+                link = LoggingLink(board_link, stack.enter_context(open(log_path, "w")), header)
             timeout_s = args.timeout if args.timeout is not None else (QEMU_TIMEOUT_S if args.board == QEMU_BOARD
                                                                        else 0.5)
             session = Session(link, schema, timeout_s=timeout_s, retries=args.retries, batch=args.batch)
@@ -102,6 +115,27 @@ def cmd_hil(args: argparse.Namespace) -> int:
           f"min/median/p99/max {data['cycles_min']}/{data['cycles_median']}/{data['cycles_p99']}/{data['cycles_max']}")
     base._write_json(args.json, data)
     return base.EXIT_OK if data["mismatches"] == 0 and data["lost"] == 0 else base.EXIT_FAIL
+
+
+def _check_log(args: argparse.Namespace, model: Any) -> int:
+    """``--check-log FILE``: re-verify a logged run offline (no board)."""
+    from pathlib import Path
+
+    from codegen.topology import topology_of
+
+    from .exchange_log import check_log
+
+    path = Path(args.check_log)
+    if not path.is_file():
+        raise UsageError(f"--check-log = {args.check_log!r}: no such file")
+    try:
+        data = check_log(model, topology_of(model).derive(model), path)
+    except (ValueError, KeyError) as exc:
+        raise UsageError(f"--check-log = {args.check_log!r}: {exc}") from None
+    print(f"{data['results']} logged results ({data.get('distinct_states', 0)} states) re-verified offline: "
+          f"mismatches {data['mismatches']}, results without a logged state {data['unmatched_results']}")
+    base._write_json(args.json, data)
+    return base.EXIT_OK if data["mismatches"] == 0 and data["results"] > 0 else base.EXIT_FAIL
 
 
 def _loop_mode(args: argparse.Namespace, session: Any, model: Any, tables: Any, log: Any) -> int:
@@ -147,7 +181,12 @@ def build_parser() -> argparse.ArgumentParser:
                         "are compared with mpcgen simulate's within a stated tolerance")
     h.add_argument("--decimation", type=int, default=1,
                    help="mode onboard: one telemetry sample every N periods (default 1)")
-    h.add_argument("--states", type=int, default=2000, help="states of each source (default 2000)")
+    h.add_argument("--states", type=int, default=6000,
+                   help="replay: states in all, shared between the recorded closed-loop run, random and "
+                        "adversarial states (default 6000)")
+    h.add_argument("--log", help="write every octet exchanged with the board to FILE (JSON lines)")
+    h.add_argument("--check-log", metavar="FILE",
+                   help="re-verify a log written with --log offline against the reference (no board)")
     h.add_argument("--seed", type=int, default=1, help="seed of the random states (default 1)")
     h.add_argument("--timeout", type=float, default=None,
                    help="seconds before an unanswered frame is sent again (default 0.5; qemu-m7: 10)")

@@ -24,7 +24,7 @@ def test_hil_replay_writes_the_summary(tmp_path, capsys, board):
     for key in ("states", "mismatches", "lost", "cycles_min", "cycles_median", "cycles_p99", "cycles_max",
                 "cycle_unit"):
         assert key in data
-    assert data["states"] == 900 and data["mismatches"] == 0 and data["lost"] == 0 and data["cycle_unit"] == "ns"
+    assert data["states"] == 300 and data["mismatches"] == 0 and data["lost"] == 0 and data["cycle_unit"] == "ns"
     err = capsys.readouterr().err
     assert "states/s" in err and "mismatches 0" in err
 
@@ -51,3 +51,38 @@ def test_codegen_commands_unchanged(capsys, tmp_path):
     assert codegen_cli.main(["firmware", str(SPMSM), "--board", "nope", "-o", str(tmp_path)]) == 2
     assert main(["--version"]) == 0 and codegen_cli.main(["--version"]) == 0
     assert "hil" not in codegen_cli.build_parser().format_help()
+
+
+def test_log_is_re_verified_offline(tmp_path, capsys):
+    """`--log FILE` records every octet; `--check-log FILE` re-verifies every logged result offline,
+    and a fabricated wrong result in the log is caught."""
+    import json
+
+    from codegen.config import load_config
+    from codegen.topology import topology_of
+    from hil.framing import encode_frame
+    from hil.messages import step_payload
+    from hil.schema import Msg, Schema
+
+    cfg = ["--set", "controller.tables=published", "--strategy", "s1"]
+    log = tmp_path / "x.log"
+    assert main(["hil", str(SPMSM), *cfg, "--states", "300", "--log", str(log), "-q"]) == 0
+    js = tmp_path / "check.json"
+    assert main(["hil", str(SPMSM), *cfg, "--check-log", str(log), "--json", str(js), "-q"]) == 0
+    data = json.loads(js.read_text())
+    assert data["results"] >= 300 and data["distinct_states"] == 300 and data["mismatches"] == 0
+    # a fabricated answer: a valid frame whose outputs are all zero
+    m = load_config(SPMSM, {"controller.tables": "published", "controller.strategy": "s1"})
+    schema = Schema.of(m)
+    x = topology_of(m).random_states(m, 1, 3)
+    bad = encode_frame(Msg.RESULT, 60000, bytes(schema.result_octets))
+    with open(log, "a") as fh:
+        fh.write(json.dumps({"t": 99.0, "dir": "out",
+                             "hex": encode_frame(Msg.STEP, 60000, step_payload(schema, x)).hex()}) + "\n")
+        fh.write(json.dumps({"t": 99.1, "dir": "in", "hex": bad.hex()}) + "\n")
+    assert main(["hil", str(SPMSM), *cfg, "--check-log", str(log), "--json", str(js), "-q"]) == 1
+    assert json.loads(js.read_text())["mismatches"] == 1
+    capsys.readouterr()
+    assert main(["hil", str(SPMSM), "--strategy", "s2", "--set", "controller.tables=published",
+                 "--check-log", str(log), "-q"]) == 2  # another config: refused, naming both hashes
+    assert "config" in capsys.readouterr().err

@@ -75,7 +75,7 @@ def test_qemu_replays_the_bench_set_with_bench_instruction_counts(config, strate
 def test_hil_command_on_qemu(tmp_path, capsys):
     out = tmp_path / "hil.json"
     rc = main(["hil", str(SPMSM), "--set", "controller.tables=published", "--set", "controller.strategy=s2",
-               "--board", "qemu-m7", "--states", "700", "--json", str(out)])
+               "--board", "qemu-m7", "--states", "2100", "--json", str(out)])
     data = json.loads(out.read_text())
     assert rc == 0, capsys.readouterr().err
     assert data["states"] == 2100 and data["mismatches"] == 0 and data["lost"] == 0

@@ -16,7 +16,7 @@ pytestmark = pytest.mark.board
 @pytest.mark.parametrize("config,strategy", CASES, ids=CASE_IDS)
 def test_replay_every_strategy_bit_for_bit(board, config, strategy):
     m, t = example(config, strategy)
-    sets = replay_states(m, t, 2000)
+    sets = replay_states(m, t, 6000)
     with board(m, t) as link:
         session = Session(link, Schema.of(m))
         session.handshake()
