@@ -106,6 +106,8 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     parser.addoption("--hil-port", default=None, metavar="URL",
                      help="serial URL of a real board for the HIL tests (default: the virtual board); the board "
                           "must be flashed from the config each test names")
+    parser.addoption("--hil-board", default=None, metavar="NAME", choices=("virtual", "qemu-m7"),
+                     help="board the harness starts for the HIL tests: virtual (default) or qemu-m7")
 
 
 def pytest_configure(config: pytest.Config) -> None:
@@ -116,12 +118,16 @@ def pytest_configure(config: pytest.Config) -> None:
 @pytest.fixture
 def board(request: pytest.FixtureRequest):
     """``board(model, tables)``: a context manager giving a link to a board running ``model``'s
-    controller: the virtual board (built and started by the harness) unless ``--hil-port URL``."""
+    controller: the virtual board (built and started by the harness), the emulated one with
+    ``--hil-board qemu-m7``, or a real board with ``--hil-port URL``."""
     from hil.boards import open_board
 
     port = request.config.getoption("--hil-port")
+    name = request.config.getoption("--hil-board")
 
     def opener(model: Model, tables: object, **kw: object):
+        if port is None and name is not None:
+            kw.setdefault("board", name)
         return open_board(model, tables, port, **kw)  # type: ignore[arg-type]
 
     opener.port = port  # type: ignore[attr-defined]
