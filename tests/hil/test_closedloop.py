@@ -11,7 +11,7 @@ import json
 
 import numpy as np
 import pytest
-from hil_support import SPMSM, TLEVEL
+from hil_support import SPMSM, TLEVEL, run_mode
 
 from codegen.config import load_config
 from codegen.model import Model
@@ -21,7 +21,7 @@ from hil.cli import main
 from hil.closedloop import closed_loop, sim_module, trace_differences
 from hil.messages import BoardInfo
 from hil.schema import Schema
-from hil.session import RunResult, RunStats, Session
+from hil.session import RunResult, RunStats
 
 #: 4 000 periods of 50 us, both speed and load steps inside (two-level)
 SHORT_2L = {"scenario.duration_s": 0.2, "scenario.speed_ref_rpm": [[0.0, 500.0], [0.1, -500.0]],
@@ -46,10 +46,7 @@ def simulate(m: Model, t: object):
 @pytest.mark.parametrize("config,strategy,overrides", CASES, ids=[f"{c.stem}-{s}" for c, s, _ in CASES])
 def test_closed_loop_equals_simulate(board, config, strategy, overrides):
     m, t = model_of(config, strategy, overrides)
-    with board(m, t) as link:
-        session = Session(link, Schema.of(m))
-        session.handshake()
-        data = closed_loop(session, m, t, show_progress=False)
+    data = run_mode(board, closed_loop, m, t)
     ref = simulate(m, t)
     sim = sim_module(m)
     assert data["periods"] == data["periods_done"] == ref.n >= 4000

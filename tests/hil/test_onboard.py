@@ -13,7 +13,7 @@ import json
 
 import numpy as np
 import pytest
-from hil_support import SPMSM, TLEVEL
+from hil_support import SPMSM, TLEVEL, run_mode
 
 from codegen.config import load_config
 from codegen.simulator.driver import scenario_arrays
@@ -57,11 +57,7 @@ def check(data: dict, decimation: int = 1) -> None:
 @pytest.mark.parametrize("config,strategy,overrides", CASES, ids=[f"{c.stem}-{s}" for c, s, _ in CASES])
 def test_onboard_metrics_match_simulate(board, config, strategy, overrides):
     m, t = model_of(config, strategy, overrides)
-    with board(m, t) as link:
-        session = Session(link, Schema.of(m))
-        session.handshake()
-        data = onboard(session, m, t, show_progress=False)
-    check(data)
+    check(run_mode(board, onboard, m, t))
 
 
 def test_profile_steps_and_compare():

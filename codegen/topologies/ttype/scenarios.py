@@ -121,9 +121,8 @@ def run_three_level(model: Model, strategies: list[str], plots: Path | None = No
     warnings: list[str] = []
     with trace_writer(traces, TRACE) as writer:
         for s in strategies:
-            variant = model.with_controller(strategy=s)
             results[s] = {}
-            for key, m, speed in runs_of(variant):
+            for key, m, speed in runs_of(model.with_controller(strategy=s)):
                 log(f"simulate {model.name} / {s} / {key}: {m.scenario.duration_s:g} s")
                 trace, wall = _run(m, log, f"{s} {key}", initial_speed_rpm=speed)
                 met = three_level_metrics(trace, m)
