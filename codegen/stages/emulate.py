@@ -7,9 +7,10 @@ every image re-checks this with its CAL line: a 1024-NOP sled must take
 1024 instructions).  The UART goes to a file; QEMU runs in its own process
 group, under a timeout, and is always killed by its id.
 
-``measure_strategies`` builds, runs and checks one image per strategy and
-returns per-strategy counts: states, mismatches, and the instructions per
-step (min/median/max) over the bench set, a recorded closed-loop trajectory.
+``run_and_check`` builds, runs and checks one strategy's image and returns
+its counts: states, mismatches, and the instructions per step
+(min/median/max) over the bench set, a recorded closed-loop trajectory
+(``mpcgen bench --emulated`` calls it per strategy).
 """
 from __future__ import annotations
 
@@ -36,7 +37,6 @@ from codegen.stages.firmware import (
     write_firmware_project,
 )
 from codegen.stages.fwdata import layouts
-from codegen.topology import topology_of
 
 #: SysTick clock of mps2-an500 (processor clock, CLKSOURCE=1).
 SYSTICK_HZ = 25_000_000
@@ -239,17 +239,3 @@ def run_and_check(model: Model, tables: Any, workdir: Path, *, n_selftest: int =
                           round(float(instr.min()), 1), round(float(np.median(instr)), 1),
                           round(float(instr.max()), 1), round(float(instr.mean()), 1),
                           ok and run.returncode == 0, run.uart)
-
-
-def measure_strategies(config: str | Path, workdir: Path, strategies: tuple[str, ...] | None = None,
-                       overrides: dict[str, object] | None = None, **kwargs: object) -> dict[str, StrategyCounts]:
-    """Per-strategy counts for the config (every strategy of its topology by default)."""
-    from codegen.config import load_config
-
-    base = load_config(config, overrides)
-    topo = topology_of(base)
-    out = {}
-    for s in strategies or topo.strategies:
-        m = base.with_controller(strategy=s)
-        out[s] = run_and_check(m, topo.derive(m), Path(workdir) / s, **kwargs)  # type: ignore[arg-type]
-    return out
