@@ -37,6 +37,8 @@ def _add_config_args(p: argparse.ArgumentParser, target: bool = False) -> None:
     p.add_argument("--strategy", help="override controller.strategy")
     p.add_argument("--predictor", help="override controller.predictor (flux-geometry, dq-euler)")
     p.add_argument("--tables", help="override controller.tables (derived, published)")
+    p.add_argument("--number-format", dest="number_format",
+                   help="override controller.number_format (float32, fixed)")
     dc = p.add_mutually_exclusive_group()
     dc.add_argument("--delay-compensation", dest="delay", action="store_const", const=True, help="predict k+2 (one-step delay compensation)")
     dc.add_argument("--no-delay-compensation", dest="delay", action="store_const", const=False)
@@ -56,7 +58,8 @@ def _load(args: argparse.Namespace) -> Model:
         k, v = parse_override(text)
         overrides[k] = v
     for attr, key in (("strategy", "controller.strategy"), ("predictor", "controller.predictor"),
-                      ("tables", "controller.tables"), ("delay", "controller.delay_compensation"),
+                      ("tables", "controller.tables"), ("number_format", "controller.number_format"),
+                      ("delay", "controller.delay_compensation"),
                       ("target", "target.name")):
         v = getattr(args, attr, None)
         if v is not None:

@@ -231,7 +231,8 @@ SCHEMA: dict[str, Spec] = {
     "controller.dt_s": _real(_cc(1e-6, 1e-3)),
     "controller.psi_ref_wb": _real(_oc(0, 10)),
     "controller.eps_t_nm": _real(_co(0, Ref("motor.rated_torque_nm"))),
-    "controller.number_format": _choice(NUMBER_FORMATS, hint="number format not supported yet"),
+    "controller.number_format": _choice(NUMBER_FORMATS),
+    "controller.fixed_q": Spec(INT, _cc(8, 30)),
     "controller.lambda_psi_nm_per_wb": _real(_cc(0, 1e6)),
     "controller.lambda_vo_nm_per_v": _real(_cc(0, 1e3)),
     "controller.t_n_min_s": _real(
@@ -365,8 +366,10 @@ def _check_interval(ck: _Checker, path: str, value: object, x: float, spec: Spec
         ck.fail(path, value, f"{spec.hint_high}: {allowed}" if spec.hint_high else allowed)
 
 
-def _check_int(ck: _Checker, path: str, value: object, spec: Spec) -> int:
+def _check_int(ck: _Checker, path: str, value: object, spec: Spec) -> int | None:
     assert spec.interval is not None
+    if value is None and _default(path) is None:
+        return None  # optional field left at "derive it" (e.g. fixed_q)
     allowed = f"must be an integer in {spec.interval.describe(ck.values)}"
     if isinstance(value, bool) or not isinstance(value, int):
         ck.fail(path, value, allowed)

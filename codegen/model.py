@@ -35,7 +35,7 @@ TARGETS: tuple[str, ...] = ("host", "stm32h743", "tms320f28377")
 FAULT_ACTIONS: tuple[str, ...] = ("gates-off", "active-short-circuit")
 SCENARIO_SETS: tuple[str, ...] = ("config", "mpdtc-table5")
 PLACEMENTS: tuple[str, ...] = ("tcm", "default")
-NUMBER_FORMATS: tuple[str, ...] = ("float32",)
+NUMBER_FORMATS: tuple[str, ...] = ("float32", "fixed")
 
 
 @dataclass(frozen=True)
@@ -85,6 +85,8 @@ class Controller:
     psi_ref_wb: float
     eps_t_nm: float
     number_format: str = "float32"
+    #: fixed point only: one global Q (IQmath style, values in SI units); None: per-signal formats
+    fixed_q: int | None = None
     #: s2/s3 switch tables written by ``mpcgen tables --derive`` (relative to the config's folder)
     tables_file: str | None = None
     derivation: Derivation = field(default_factory=Derivation)

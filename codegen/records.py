@@ -58,14 +58,35 @@ class Field:
     kind: str  # REAL | U16 | F64 | F32 | I32 | I64
     length: int
     doc: str
+    #: SI unit (``codegen.numfmt.units``) when the name's suffix does not say it
+    unit_override: str | None = None
+
+    @property
+    def unit(self) -> str:
+        """SI unit of the value: the override, else the name's unit suffix (``_a``, ``_v``, ``_nm``,
+        ``_wb``, ``_s``, ``_rad``, ``_rad_s``), else dimensionless ``""``.  Fixes a real field's
+        fixed-point Q format."""
+        if self.unit_override is not None:
+            return self.unit_override
+        for suffix, unit in _UNIT_SUFFIXES:
+            if self.name.endswith(suffix):
+                return unit
+        return ""
 
 
-def fields(table: str, **lengths: int) -> tuple[Field, ...]:
+#: unit of a field by its name's suffix (longest first)
+_UNIT_SUFFIXES: tuple[tuple[str, str], ...] = (
+    ("_rad_s", "rad/s"), ("_rad", "rad"), ("_nm", "N*m"), ("_wb", "Wb"), ("_a", "A"), ("_v", "V"), ("_s", "s"),
+)
+
+
+def fields(table: str, units: dict[str, str] | None = None, **lengths: int) -> tuple[Field, ...]:
     """Fields from a text table, one per line: ``name  kind  length  meaning...``.
 
     ``kind`` is a kind's value (``real``, ``u16``, ``f64``, ...); ``length`` a
     number or the name of a keyword argument (``fields(TABLE, N_SEG=7)``).
-    Blank lines are skipped.
+    Blank lines are skipped.  ``units``: the SI unit of a field whose name
+    has no unit suffix (``Field.unit``).
     """
     out = []
     for line in table.strip().splitlines():
@@ -74,7 +95,8 @@ def fields(table: str, **lengths: int) -> tuple[Field, ...]:
         name, kind, length, doc = line.split(None, 3)
         if kind not in KINDS:
             raise ValueError(f"field {name}: unknown kind {kind!r}; kinds: {', '.join(KINDS)}")
-        out.append(Field(name, kind, lengths[length] if length in lengths else int(length), doc.strip()))
+        out.append(Field(name, kind, lengths[length] if length in lengths else int(length), doc.strip(),
+                         (units or {}).get(name)))
     return tuple(out)
 
 
@@ -178,6 +200,14 @@ class RecordLayout:
         text = self.record.name + ";" + ";".join(
             f"{f.name}:{f.kind}:{self.c_type(f)}:{f.length}" for f in self.fields)
         return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+    def encode(self, name: str, x: object) -> np.ndarray:
+        """SI values ``x`` of real field ``name`` stored in the format (its unit's Q format in fixed point)."""
+        return self.nf.encode(self.record.field(name).unit, x)
+
+    def decode(self, name: str, n: object) -> np.ndarray:
+        """SI values (float64) of stored values ``n`` of real field ``name``."""
+        return self.nf.decode(self.record.field(name).unit, n)
 
     def zeros(self, n: int) -> np.ndarray:
         """``n`` zeroed records."""

@@ -16,11 +16,10 @@ import jinja2
 
 from codegen import __version__
 from codegen.kernels.consts import Const
-from codegen.kernels.trig import ANGLE_GUARD_RAD
 from codegen.model import Model
 from codegen.numfmt import NumberFormat, number_format
 from codegen.numfmt.float32 import c_float_literal
-from codegen.records import Record
+from codegen.records import REAL, Record
 from codegen.resources import templates_dir
 
 
@@ -112,12 +111,16 @@ def step_context(model: Model, target: str, records: tuple[Record, Record],
                  faults: tuple[tuple[str, int, str], ...], **values: object) -> dict:
     """Context of a topology's step templates: the shared part (banner, number format, records,
     fault bits) plus the topology's own ``values`` (constants, tables, guard checks ...)."""
-    nf = number_format(model.controller.number_format)
+    nf = number_format(model.controller.number_format).scaled(values.get("scaling"))
+    real = [f for r in records for f in r.fields if f.kind == REAL]
     return {
         **base_context(model, target),
+        **nf.template_values(),
+        "real_fields": [{"name": f.name, "unit": f.unit, "q": nf.scaling.q(f.unit) if nf.scaling else 0}
+                        for f in real],
         "faults": faults,
         "dt_s": model.controller.dt_s,
-        "angle_guard_rad": ANGLE_GUARD_RAD,
+        "angle_guard_rad": nf.angle_guard_rad,
         "input_fields": records[0].bind(nf).members,
         "output_fields": records[1].bind(nf).members,
         **values,

@@ -22,6 +22,7 @@ from typing import Literal
 import numpy as np
 
 from codegen.numfmt.float32 import F
+from codegen.records import REAL, RecordLayout
 
 __all__ = [
     "NON_FINITE", "Limit", "phase_currents", "random_currents_and_motion", "random_torque_ref",
@@ -108,11 +109,28 @@ def angle_reduction_borders(n: int, angle_guard: float, rng: np.random.Generator
     return th
 
 
-def threshold_torque_refs(te: np.ndarray, eps: np.float32, rng: np.random.Generator) -> np.ndarray:
+def in_format(x: np.ndarray, layout: RecordLayout) -> np.ndarray:
+    """States built as float32 SI values (the builders here) as input records of ``layout`` (the
+    input record in the step's number format): each real field converted once (fixed point: round
+    half up, saturated, NaN -> 0, so the guard-limit and non-finite cases land on the format's
+    extremes), the other fields copied.  Records already in the format are returned as they are."""
+    if x.dtype == layout.dtype:
+        return x
+    out = layout.zeros(len(x))
+    for f in layout.fields:
+        out[f.name] = layout.encode(f.name, x[f.name].astype(np.float64)) if f.kind == REAL else x[f.name]
+    return out
+
+
+def threshold_torque_refs(te: np.ndarray, eps: np.generic, rng: np.random.Generator) -> np.ndarray:
     """Torque references exactly at the torque-error threshold ``te +- eps`` (the step's own
-    float32 torque estimate ``te`` and threshold ``eps``), a third of them one float32 step
-    above and a third one below."""
+    torque estimate ``te`` and threshold ``eps``, in the step's format), a third of them one step of
+    the format (a float32 ulp, or one fixed-point count) above and a third one below."""
     n = len(te)
+    if np.issubdtype(te.dtype, np.integer):
+        sign = np.where(rng.random(n) < 0.5, 1, -1)
+        tref = te.astype(np.int64) + sign * int(eps) + rng.integers(-1, 2, n)
+        return np.clip(tref, -(2**31), 2**31 - 1).astype(te.dtype)
     sign = np.where(rng.random(n) < 0.5, F(1), F(-1))
     tref = (te + sign * eps).astype(np.float32)
     step = rng.integers(-1, 2, n)

@@ -88,8 +88,9 @@ class Topology(Protocol):
         """About ``n`` adversarial states (borders, ties, guard limits, non-finite values)."""
         ...
 
-    def random_states(self, model: Model, n: int, seed: int) -> np.ndarray:
-        """``n`` random states over (and a little beyond) the operating range."""
+    def random_states(self, model: Model, tables: Any, n: int, seed: int) -> np.ndarray:
+        """``n`` random states over (and a little beyond) the operating range, in the step's format
+        (``tables.nf``)."""
         ...
 
     def selftest_states(self, model: Model, tables: Any, n: int, seed: int) -> np.ndarray:
@@ -126,13 +127,13 @@ class Topology(Protocol):
 
 
 def record_trajectory(base: Model, lib: HostLib, run: Callable[..., Any],
-                      inputs: Callable[[Any, Model], np.ndarray], progress: Progress | None = None) -> Trajectory:
+                      inputs: Callable[[Any, Model, Any], np.ndarray], progress: Progress | None = None) -> Trajectory:
     """Run ``base``'s scenario through ``lib`` (``run(ffi, lib, model, progress=...)``) and keep the
-    controller inputs it fed the step, with the run's wall time."""
+    controller inputs it fed the step (``inputs(trace, model, number_format)``), with the run's wall time."""
     t0 = time.perf_counter()
     trace = run(lib.ffi, lib.lib, base, progress=progress)
     wall = time.perf_counter() - t0
-    return Trajectory(inputs(trace, base), wall, trace.n)
+    return Trajectory(inputs(trace, base, lib.records.input.nf), wall, trace.n)
 
 
 #: ``inverter.topology`` value -> the plugin module

@@ -28,7 +28,7 @@ def replay_states(model: Model, tables: Any, n: int, seed: int = 1,
         if src == "closed_loop":
             out[src] = trajectory_states(model, n)
         elif src == "random":
-            out[src] = topo.random_states(model, n, seed)
+            out[src] = topo.random_states(model, tables, n, seed)
         elif src == "adversarial":
             out[src] = topo.adversarial_states(model, tables, max(n, 1000))[:n]
         else:

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from codegen.kernels.consts import Const, Constants
-from codegen.numfmt import NumberFormat, Ops, number_format
+from codegen.numfmt import NumberFormat, Ops
 from codegen.records import REAL, Record
 
 __all__ = ["run_batch", "zero_faulted", "StepFrame", "begin_step"]
@@ -52,10 +52,9 @@ class StepFrame:
     inp: dict[str, np.ndarray]
 
 
-def begin_step(number_format_name: str, consts: Iterable[Const], x: np.ndarray, fault: np.ndarray,
+def begin_step(nf: NumberFormat, consts: Iterable[Const], x: np.ndarray, fault: np.ndarray,
                inputs: Record, outputs: Record) -> StepFrame:
-    """The common start of a reference step over the batch ``x`` whose guard gave ``fault``."""
-    nf = number_format(number_format_name)
+    """The common start of a reference step in format ``nf`` over the batch ``x`` whose guard gave ``fault``."""
     ok = fault == 0
     return StepFrame(nf, nf.ops, Constants(consts), len(x), outputs.bind(nf).zeros(len(x)), fault, ok,
                      nf.ops.const(0.0), zero_faulted(nf.ops, ok, x, inputs.fields, REAL))

@@ -6,12 +6,13 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import Any
 
-from codegen.kernels.trig import ANGLE_GUARD_RAD, sincos_constants
+from codegen.kernels.trig import sincos_constants
 from codegen.model import Model
-from codegen.numfmt import NumberFormat
+from codegen.numfmt import NumberFormat, number_format
 from codegen.units import GUARD_UNITS
 
-__all__ = ["Const", "Constants", "guard_limits", "leading_constants", "sector_constants", "fault_action_constants"]
+__all__ = ["Const", "Constants", "guard_limits", "in_format", "leading_constants", "sector_constants",
+           "fault_action_constants"]
 
 
 @dataclass(frozen=True)
@@ -52,44 +53,57 @@ def guard_limits(model: Model, dc_min: str, dc_max: str, dc_scale: float) -> dic
         "I_TRIP_A": inv.i_trip_a,
         dc_min: inv.udc_min_v * dc_scale,
         dc_max: inv.udc_max_v * dc_scale,
-        "ANGLE_GUARD_RAD": ANGLE_GUARD_RAD,
+        "ANGLE_GUARD_RAD": number_format(model.controller.number_format).angle_guard_rad,
         "OMEGA_GUARD_RAD_S": 5.0 * rated_omega_e,
         "TORQUE_REF_GUARD_NM": 4.0 * max(sl.limit_nm, m.rated_torque_nm),
     }
 
 
-def leading_constants(nf: NumberFormat, limits: dict[str, float]) -> list[Const]:
-    """Constants every step starts with: sin/cos coefficients, guard limits, the Clarke gain."""
+def in_format(nf: NumberFormat, consts: Iterable[Const]) -> tuple[Const, ...]:
+    """The constants (float64 values) rounded once to the step's format ``nf``, by their units."""
+    return tuple(Const(c.name, nf.const(float(c.value), c.unit), c.unit, c.doc) for c in consts)
+
+
+def leading_constants(limits: dict[str, float]) -> list[Const]:
+    """Constants every step starts with (float64 values; ``in_format`` rounds them): sin/cos
+    coefficients, guard limits, the Clarke gain."""
     out = [Const(*c) for c in sincos_constants()]
-    out += [Const(name, nf.const(v), GUARD_UNITS.get(name, ""), "input guard limit") for name, v in limits.items()]
-    out.append(Const("INV_SQRT3", nf.const(1 / math.sqrt(3)), "", "Clarke: i_beta = (i_a + 2 i_b)/sqrt(3)"))
+    out += [Const(name, float(v), GUARD_UNITS.get(name, ""), "input guard limit") for name, v in limits.items()]
+    out.append(Const("INV_SQRT3", 1 / math.sqrt(3), "", "Clarke: i_beta = (i_a + 2 i_b)/sqrt(3)"))
     return out
 
 
-def sector_constants(nf: NumberFormat) -> list[Const]:
-    """The sector-border gains of ``sector.sector12`` (eq. (12))."""
+def sector_constants() -> list[Const]:
+    """The sector-border gains of ``sector.sector12`` (eq. (12)), float64."""
     return [
-        Const("TAN30", nf.const(math.tan(math.pi / 6)), "", "sector borders at 30 deg multiples"),
-        Const("TAN60", nf.const(math.tan(math.pi / 3)), "", "tan(60 deg): sector borders"),
+        Const("TAN30", math.tan(math.pi / 6), "", "sector borders at 30 deg multiples"),
+        Const("TAN60", math.tan(math.pi / 3), "", "tan(60 deg): sector borders"),
     ]
 
 
-def fault_action_constants(model: Model, nf: NumberFormat) -> list[Const]:
+def fault_action_constants(model: Model) -> list[Const]:
     """The constant of ``controller.fault_action`` (none for "gates-off"): for "active-short-circuit"
-    the electrical-speed threshold p * asc_min_speed_rpm * 2 pi / 60 of the short circuit,
-    computed in float64 and rounded once."""
+    the electrical-speed threshold p * asc_min_speed_rpm * 2 pi / 60 of the short circuit (float64)."""
     c = model.controller
     if c.fault_action != "active-short-circuit":
         return []
     w = model.motor.pole_pairs * c.asc_min_speed_rpm * 2.0 * math.pi / 60.0
-    return [Const("ASC_OMEGA_MIN_RAD_S", nf.const(w), "rad/s",
+    return [Const("ASC_OMEGA_MIN_RAD_S", w, "rad/s",
                   "fault: active short circuit at |omega_e| >= this (p * asc_min_speed_rpm), else gates off")]
 
 
 class HasConsts:
-    """Mixin of derived tables that carry their constants as ``consts``."""
+    """Mixin of derived tables that carry their constants as ``consts``, their number format's
+    name ``number_format`` and its ``scaling`` (fixed point; None for float32)."""
 
     consts: tuple[Const, ...]
+    number_format: str
+    scaling: Any
+
+    @property
+    def nf(self) -> NumberFormat:
+        """The step's number format, bound to its scaling."""
+        return number_format(self.number_format).scaled(self.scaling)
 
     def const(self, name: str) -> Any:
         """Value of the constant ``name``."""

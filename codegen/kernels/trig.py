@@ -28,7 +28,7 @@ from codegen.numfmt import Ops
 from codegen.numfmt.float32 import FLOAT32, f32
 
 #: Largest |theta_e| the step accepts (rad); beyond it the input guard trips.
-ANGLE_GUARD_RAD = 256.0
+ANGLE_GUARD_RAD = FLOAT32.angle_guard_rad
 _PIO2_HI_BITS = 15  # n <= 2^(24-15) = 512 > 256 * 2/pi + 1
 
 
@@ -91,10 +91,20 @@ def _horner(ops: Any, coeffs: Any, x: Any) -> Any:
     return p
 
 
-def sincos(ops: Ops, x: Any, k: SinCosCoeffs | None = None) -> tuple[Any, Any]:
+def coeffs_of(k: Any) -> SinCosCoeffs:
+    """The coefficients as a step's constants hold them (``k.TWO_OVER_PI`` ...: in the step's format)."""
+    return SinCosCoeffs(k.TWO_OVER_PI, k.PIO2_HI, k.PIO2_LO, (k.SIN_S3, k.SIN_S5, k.SIN_S7),
+                        (k.COS_C2, k.COS_C4, k.COS_C6, k.COS_C8))
+
+
+def sincos(ops: Ops, x: Any, consts: Any = None) -> tuple[Any, Any]:
     """sin and cos of ``x`` through the format's ``ops``: the exact operation sequence of the C
-    (``templates/common/kernels.j2`` ``sincos_fn``)."""
-    k = k or sincos_coeffs()
+    (``templates/common/kernels.j2`` ``sincos_fn``).  ``consts``: the step's constants
+    (``Constants``; their sin/cos coefficients in the format), or None for the float32 coefficients."""
+    return _sincos(ops, x, sincos_coeffs() if consts is None else coeffs_of(consts))
+
+
+def _sincos(ops: Ops, x: Any, k: SinCosCoeffs) -> tuple[Any, Any]:
     x = ops.array(x)
     half = ops.const(0.5)
     y = ops.mul(x, k.two_over_pi)
@@ -118,7 +128,7 @@ def sincos(ops: Ops, x: Any, k: SinCosCoeffs | None = None) -> tuple[Any, Any]:
 
 def sincos_f32(x: np.ndarray, k: SinCosCoeffs | None = None) -> tuple[np.ndarray, np.ndarray]:
     """sin and cos of float32 ``x``, the exact operation sequence of the C."""
-    return sincos(FLOAT32.ops, x, k)
+    return _sincos(FLOAT32.ops, x, k or sincos_coeffs())
 
 
 def sincos_constants() -> list[tuple[str, np.float32, str, str]]:

@@ -5,8 +5,9 @@ is stored (numpy dtype, C type, bit pattern for comparison), how a constant
 is rounded once and printed as a C literal, and which jinja2 macro library
 (``templates/numfmt/<name>.j2``) spells its operations in C.  The Python
 reference's operation helpers live in the backend module too.  A new format
-(fixed point) is a new backend module registered in :data:`FORMATS`, not a
-branch in the stages or the topologies.
+is a new backend module registered in :data:`FORMATS`, not a branch in the
+stages or the topologies: float32 (``float32.py``) and fixed point
+(``fixed.py``, with its Q formats from ``scaling.py``).
 """
 from __future__ import annotations
 
@@ -85,12 +86,44 @@ class NumberFormat(Protocol):
         ...
 
     @property
+    def angle_guard_rad(self) -> float:
+        """Largest |theta_e| the step accepts (the input guard's ANGLE limit), rad."""
+        ...
+
+    @property
+    def scaling(self) -> Any:
+        """The step's Q formats (``scaling.Scaling``) of a fixed-point format; None for float32."""
+        ...
+
+    @property
     def ops(self) -> Ops:
         """The reference's operation helpers in this format."""
         ...
 
-    def const(self, x: float) -> np.generic:
-        """Round a float64 constant once to the format."""
+    def const(self, x: float, unit: str = "") -> np.generic:
+        """Round a float64 constant of ``unit`` once to the format."""
+        ...
+
+    def encode(self, unit: str, x: Any) -> np.ndarray:
+        """Stored values of SI values ``x`` (float64) of ``unit`` (host-side inputs: states, HIL)."""
+        ...
+
+    def decode(self, unit: str, n: Any) -> np.ndarray:
+        """SI values (float64) of stored values ``n`` of ``unit``."""
+        ...
+
+    def scaled(self, scaling: Any) -> NumberFormat:
+        """This format bound to a step's scaling (``codegen.numfmt.scaling``; float32 needs none)."""
+        ...
+
+    def template_values(self) -> dict[str, object]:
+        """Values the format's macro library reads from the template context."""
+        ...
+
+    def for_step(self, signals: list[Any], base: Any, global_q: int | None) -> NumberFormat:
+        """This format for a step with these signal ranges and constants (``scaling.Signal``) and
+        base ranges (``scaling.BaseRanges``); fixed point chooses its Q formats (RepresentationError
+        if one does not fit), float32 returns itself."""
         ...
 
     def literal(self, x: float | np.generic) -> str:
@@ -110,7 +143,8 @@ def number_format(name: str) -> NumberFormat:
         raise ValueError(f"unknown number format {name!r}; allowed: {', '.join(FORMATS)}") from None
 
 
-from .float32 import FLOAT32  # noqa: E402  (the registry needs the Protocol above)
+from .fixed import FIXED  # noqa: E402  (the registry needs the Protocol above)
+from .float32 import FLOAT32  # noqa: E402
 
-#: Every number format, by ``controller.number_format`` value.
-FORMATS: dict[str, NumberFormat] = {FLOAT32.name: FLOAT32}
+#: Every number format, by ``controller.number_format`` value (layouts; ``scaled`` binds a step's scaling).
+FORMATS: dict[str, NumberFormat] = {FLOAT32.name: FLOAT32, FIXED.name: FIXED}

@@ -147,9 +147,27 @@ class Float32:
     value_kind: str = "MPC_VALUE_F32"
     value_reader: str = "mpc_f32_bits"
     ops: Float32Ops = field(default_factory=Float32Ops)
+    scaling: Any = None
+    #: the sin/cos range reduction is exact for |n| <= 163 (codegen.kernels.trig)
+    angle_guard_rad: float = 256.0
 
-    def const(self, x: float) -> np.float32:
+    def const(self, x: float, unit: str = "") -> np.float32:
         return f32(x)
+
+    def encode(self, unit: str, x: Any) -> np.ndarray:
+        return np.asarray(x, np.float64).astype(np.float32)
+
+    def decode(self, unit: str, n: Any) -> np.ndarray:
+        return np.asarray(n, np.float32).astype(np.float64)
+
+    def scaled(self, scaling: Any) -> Float32:
+        return self
+
+    def template_values(self) -> dict[str, object]:
+        return {}
+
+    def for_step(self, signals: list[Any], base: Any, global_q: int | None) -> Float32:
+        return self
 
     def literal(self, x: float | np.generic) -> str:
         return c_float_literal(x)  # type: ignore[arg-type]

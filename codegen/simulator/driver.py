@@ -21,6 +21,7 @@ import numpy as np
 
 from codegen.errors import MpcgenError
 from codegen.model import Model
+from codegen.records import RecordLayout
 from codegen.simulator.api import SimApi
 from codegen.simulator.records import SimStruct
 
@@ -158,19 +159,21 @@ def trace_class(name: str, module: str, trace: SimStruct, doc: str, scalars: tup
                                       namespace={"__doc__": doc, "__module__": module})
 
 
-def motor_inputs(trace: Any, model: Model, dtype: np.dtype) -> np.ndarray:
-    """Controller-input records with the fields every topology's loop fills alike.
+def motor_inputs(trace: Any, model: Model, layout: RecordLayout) -> np.ndarray:
+    """Controller-input records (``layout``: the input record in the step's number format) with the
+    fields every topology's loop fills alike.
 
     ``ia_a``, ``ib_a``, ``theta_e_rad``, ``omega_e_rad_s`` = p*omega_m and
-    ``torque_ref_nm``: each the float64 sample rounded once to float32, as
-    the C cast does (sim_period.h step 4); the other fields are zero.
+    ``torque_ref_nm``: each the float64 sample converted to the format as
+    the C loop's ``MPC_ENCODE_*`` does (sim_period.h step 4; float32:
+    rounded once); the other fields are zero.
     """
-    rec = np.zeros(trace.n, dtype=dtype)
-    rec["ia_a"] = trace.ia_a.astype(np.float32)
-    rec["ib_a"] = trace.ib_a.astype(np.float32)
-    rec["theta_e_rad"] = trace.theta_e_rad.astype(np.float32)
-    rec["omega_e_rad_s"] = (float(model.motor.pole_pairs) * trace.omega_m_rad_s).astype(np.float32)
-    rec["torque_ref_nm"] = trace.torque_ref_nm.astype(np.float32)
+    rec = layout.zeros(trace.n)
+    rec["ia_a"] = layout.encode("ia_a", trace.ia_a)
+    rec["ib_a"] = layout.encode("ib_a", trace.ib_a)
+    rec["theta_e_rad"] = layout.encode("theta_e_rad", trace.theta_e_rad)
+    rec["omega_e_rad_s"] = layout.encode("omega_e_rad_s", float(model.motor.pole_pairs) * trace.omega_m_rad_s)
+    rec["torque_ref_nm"] = layout.encode("torque_ref_nm", trace.torque_ref_nm)
     return rec
 
 

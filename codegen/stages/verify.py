@@ -72,7 +72,7 @@ def verify_strategy(
     n_adv = min(200_000, n_states // 5)
     parts["adversarial"] = topo.adversarial_states(model, tables, max(n_adv, 1000))[:n_adv]
     n_random = max(n_states - sum(len(p) for p in parts.values()), 0)
-    parts["random"] = topo.random_states(model, n_random, RANDOM_SEED)
+    parts["random"] = topo.random_states(model, tables, n_random, RANDOM_SEED)
     return compare_batches(model.controller.strategy, parts, functools.partial(topo.step_batch, tables),
                            lib.step_batch, log, t0)
 

@@ -58,7 +58,7 @@ def record_controller(name: str) -> None:
         lib = topo.host_library(m, t, with_sim=True)
         x = np.concatenate([_spaced(topo.closed_loop_states(m, lib), N_CLOSED),
                             topo.adversarial_states(m, t, N_ADV)[:N_ADV],
-                            topo.random_states(m, N_RANDOM, 5)])
+                            topo.random_states(m, t, N_RANDOM, 5)])
         ref, got = topo.step_batch(t, x), lib.step_batch(x)
         assert ref.tobytes() == got.tobytes(), f"{name}/{s}: C and reference differ"
         _store(arrays, s, x, ref)

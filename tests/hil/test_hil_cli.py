@@ -74,7 +74,7 @@ def test_log_is_re_verified_offline(tmp_path, capsys):
     # a fabricated answer: a valid frame whose outputs are all zero
     m = load_config(SPMSM, {"controller.tables": "published", "controller.strategy": "s1"})
     schema = Schema.of(m)
-    x = topology_of(m).random_states(m, 1, 3)
+    x = topology_of(m).random_states(m, topology_of(m).derive(m), 1, 3)
     bad = encode_frame(Msg.RESULT, 60000, bytes(schema.result_octets))
     with open(log, "a") as fh:
         fh.write(json.dumps({"t": 99.0, "dir": "out",

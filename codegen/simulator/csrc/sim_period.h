@@ -48,16 +48,17 @@ typedef struct {
 } sim_sample_t;
 
 /* Step 4, the controller inputs every topology fills alike: the motor
- * measurements (codegen.records.MOTOR_INPUT_FIELDS) and T*, each cast to
- * float as a real controller sees them.  `in` is the topology's mpc_input_t
+ * measurements (codegen.records.MOTOR_INPUT_FIELDS) and T*, each converted
+ * to the step's number format as a real controller sees them (MPC_ENCODE_*,
+ * mpc_binding.h: a float cast, or a fixed-point count).  `in` is the topology's mpc_input_t
  * (a macro: the input type is the generated binding's), `v` a sim_sample_t. */
-#define SIM_PERIOD_MOTOR_INPUTS(in, v)              \
-    do {                                            \
-        (in).ia_a = (float)(v).ia;                  \
-        (in).ib_a = (float)(v).ib;                  \
-        (in).theta_e_rad = (float)(v).th;           \
-        (in).omega_e_rad_s = (float)(v).omega_e;    \
-        (in).torque_ref_nm = (float)(v).t_ref;      \
+#define SIM_PERIOD_MOTOR_INPUTS(in, v)                          \
+    do {                                                        \
+        (in).ia_a = MPC_ENCODE_ia_a((v).ia);                    \
+        (in).ib_a = MPC_ENCODE_ib_a((v).ib);                    \
+        (in).theta_e_rad = MPC_ENCODE_theta_e_rad((v).th);      \
+        (in).omega_e_rad_s = MPC_ENCODE_omega_e_rad_s((v).omega_e); \
+        (in).torque_ref_nm = MPC_ENCODE_torque_ref_nm((v).t_ref); \
     } while (0)
 
 /* Shared parameter checks (pmsm_dq_sim_params_valid); 1 valid, 0 not (p NULL: 0). */

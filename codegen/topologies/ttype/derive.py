@@ -24,8 +24,9 @@ import numpy as np
 from codegen.kernels.consts import Const, HasConsts, fault_action_constants, leading_constants, sector_constants
 from codegen.kernels.consts import guard_limits as shared_guard_limits
 from codegen.kernels.dq import DqModel
+from codegen.kernels.stepformat import motor_ranges, step_format
 from codegen.model import Model
-from codegen.numfmt import NumberFormat, number_format
+from codegen.numfmt.scaling import Scaling, Signal
 from codegen.topologies.ttype import candidates as cd
 from codegen.topologies.ttype import vectors as v
 from codegen.topologies.ttype import virtual as vv
@@ -54,6 +55,8 @@ class ThreeLevelTables(HasConsts):
     row_labels: tuple[str, ...]
     group_labels: tuple[str, ...]
     number_format: str = "float32"
+    #: fixed point: the Q formats (codegen.numfmt.scaling); None for float32
+    scaling: Scaling | None = None
     #: controller.fault_action: what the gates_off output asks on a fault ("gates-off" | "active-short-circuit")
     fault_action: str = "gates-off"
 
@@ -102,11 +105,12 @@ def t_n_min(model: Model) -> float:
     return c.dt_s / 6.0 if c.t_n_min_s is None else c.t_n_min_s
 
 
-def _constants(model: Model, nf: NumberFormat) -> list[Const]:
+def _constants(model: Model) -> list[Const]:
+    """The step's constants, float64 (``in_format`` rounds them to the step's format)."""
     m, c, inv = model.motor, model.controller, model.inverter
     ts = c.dt_s
-    f = nf.const
-    out = leading_constants(nf, guard_limits(model))
+    f = float
+    out = leading_constants(guard_limits(model))
     out += [
         Const("SQRT3_2", f(math.sqrt(3) / 2), "", "inverse Clarke: i_b = -i_alpha/2 + sqrt(3)/2 i_beta"),
         Const("HALF", f(0.5), "", "1/2"),
@@ -126,8 +130,19 @@ def _constants(model: Model, nf: NumberFormat) -> list[Const]:
         Const("TWO_C", f(2.0 * inv.c_f), "F", "2C: T_N deadbeat numerator V_o 2C"),
         Const("LAMBDA_PSI", f(c.lambda_psi_nm_per_wb), "N*m/Wb", "eq. (7) lambda1"),
         Const("LAMBDA_VO", f(c.lambda_vo_nm_per_v), "N*m/V", "eq. (7) lambda2"),
-    ] + sector_constants(nf) + fault_action_constants(model, nf)
+    ] + sector_constants() + fault_action_constants(model)
     return out
+
+
+def cost_bounds(model: Model) -> list[Signal]:
+    """Worst case of the cost (eq. (7), N*m; fixed-point ranges):
+    g <= (T*_guard + Te_max) + lambda1 2 psi_max + lambda2 udc_max/2."""
+    c = model.controller
+    _, sigs = motor_ranges(model)
+    te_max, psi_max = sigs[2].max_abs, sigs[1].max_abs
+    g = (guard_limits(model)["TORQUE_REF_GUARD_NM"] + te_max + c.lambda_psi_nm_per_wb * 2.0 * psi_max
+         + c.lambda_vo_nm_per_v * model.inverter.udc_max_v / 2.0)
+    return [Signal("g (cost, eq. (7))", "N*m", g, "controller.lambda_psi_nm_per_wb")]
 
 
 def _label_63(p: int, k: int) -> str:
@@ -176,7 +191,7 @@ def derive_three_level(model: Model) -> ThreeLevelTables:
             idx.append(index[g])
         row_groups.append(tuple(idx))
     ux, uy = vv.vector_voltages()
-    nf = number_format(model.controller.number_format)
+    nf, consts = step_format(model, _constants(model), cost_bounds(model))
     f = nf.const
     seq = []
     for i in range(vv.N_VECTORS):
@@ -184,7 +199,7 @@ def derive_three_level(model: Model) -> ThreeLevelTables:
     return ThreeLevelTables(
         prefix=model.prefix,
         strategy=strategy,
-        consts=tuple(_constants(model, nf)),
+        consts=consts,
         io_a=tuple(f(s.io[0]) for s in v.STATES),
         io_b=tuple(f(s.io[1]) for s in v.STATES),
         io_c=tuple(f(s.io[2]) for s in v.STATES),
@@ -199,5 +214,6 @@ def derive_three_level(model: Model) -> ThreeLevelTables:
         row_labels=tuple(labels),
         group_labels=tuple(_group_label(g) for g in groups),
         number_format=nf.name,
+        scaling=nf.scaling,
         fault_action=model.controller.fault_action,
     )

@@ -13,4 +13,4 @@ def build_three_level_library(model: Model, tables: ThreeLevelTables, with_sim: 
     """Render the host profile (+ the closed loop), compile strictly, load (cached)."""
     sim = simulator_of("codegen.topologies.ttype.sim") if with_sim else None
     return build_step_library(model, "_mpc_ttype", render_three_level(model, tables, "host"),
-                              render_cdef(model, tables), (INPUT, OUTPUT), sim)
+                              render_cdef(model, tables), (INPUT, OUTPUT), sim, tables.nf)

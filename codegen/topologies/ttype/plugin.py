@@ -14,6 +14,7 @@ import numpy as np
 from codegen.errors import Unsupported
 from codegen.hostbuild import HostLib
 from codegen.model import STRATEGIES_BY_TOPOLOGY, Model
+from codegen.teststates import in_format
 from codegen.topologies.ttype import fwstates, scenarios, sim
 from codegen.topologies.ttype import reference as ref
 from codegen.topologies.ttype import report as report_md
@@ -54,7 +55,7 @@ def closed_loop_states(model: Model, lib: HostLib) -> np.ndarray:
     runs = []
     for speed in VERIFY_SPEEDS_RPM:
         m = model.replace(scenario=dataclasses.replace(model.scenario, speed_ref_rpm=((0.0, speed),)))
-        runs.append(sim.controller_inputs(sim.run_closed_loop(lib.ffi, lib.lib, m), m))
+        runs.append(sim.controller_inputs(sim.run_closed_loop(lib.ffi, lib.lib, m), m, lib.records.input.nf))
     return np.concatenate(runs)
 
 
@@ -62,8 +63,8 @@ def adversarial_states(model: Model, tables: Any, n: int) -> np.ndarray:
     return test_states.adversarial_states(model, tables, n_target=n)
 
 
-def random_states(model: Model, n: int, seed: int) -> np.ndarray:
-    return test_states.random_states(model, n, seed=seed)
+def random_states(model: Model, tables: Any, n: int, seed: int) -> np.ndarray:
+    return in_format(test_states.random_states(model, n, seed=seed), input_record.bind(tables.nf))
 
 
 def trajectory(model: Model, progress: Progress | None = None) -> Trajectory:

@@ -46,7 +46,7 @@ OUTPUT_FIELDS: tuple[Field, ...] = fields("""
     u_ref_alpha_v  real  1           deadbeat reference voltage u*, alpha, V
     u_ref_beta_v   real  1           deadbeat reference voltage u*, beta, V
     t_n_s          real  1           T_N of the chosen vector, s (0 for a basic state)
-    cost_best      real  1           cost of the chosen candidate
+    cost_best      real  1           cost of the chosen candidate, N*m (eq. (7))
     costs          real  N_MAX_EVAL  cost of group j, evaluation order; 0 beyond n_eval
     seg_s          real  N_SEGMENTS  segment times, s (sum Ts; see module doc)
     states         u16   N_SEGMENTS  switching state 0..26 of each segment
@@ -58,7 +58,7 @@ OUTPUT_FIELDS: tuple[Field, ...] = fields("""
     fault          u16   1           fault bits (FAULT_* below); nonzero => safe decision
     gates_off      u16   1           1: disable the PWM outputs this period (fault, controller.fault_action); 0: apply
     cand           u16   N_MAX_EVAL  resolved member (vector id) of group j; 0 beyond n_eval
-""", N_MAX_EVAL=N_MAX_EVAL, N_SEGMENTS=N_SEGMENTS)
+""", units={"cost_best": "N*m", "costs": "N*m"}, N_MAX_EVAL=N_MAX_EVAL, N_SEGMENTS=N_SEGMENTS)
 
 #: first virtual vector id; ids above N_IDS - 1 are not vectors
 FIRST_VIRTUAL = 27

@@ -53,19 +53,19 @@ from codegen.kernels.consts import Constants
 from codegen.kernels.guard import evaluate, gates_off
 from codegen.kernels.sector import sector12
 from codegen.kernels.trig import sincos
-from codegen.numfmt import Ops, number_format
+from codegen.numfmt import Ops
 from codegen.topologies.ttype.derive import DQ, ThreeLevelTables
 from codegen.topologies.ttype.records import FAULT, GUARD, INPUT, N_MAX_EVAL, N_SEGMENTS, OUTPUT, SAFE_STATE
 
 
 def guard(t: ThreeLevelTables, x: np.ndarray) -> np.ndarray:
     """Fault bits per state (numerics.md: non-finite or out-of-range inputs)."""
-    return evaluate(number_format(t.number_format).ops, GUARD, FAULT, Constants(t.consts), x)
+    return evaluate(t.nf.ops, GUARD, FAULT, Constants(t.consts), x)
 
 
 def step_batch(t: ThreeLevelTables, x: np.ndarray) -> np.ndarray:
     """Run the step on every record of ``x`` (the input record); return output records."""
-    return run_batch(x, INPUT.bind(number_format(t.number_format)).dtype, lambda x: _step(t, x))
+    return run_batch(x, INPUT.bind(t.nf).dtype, lambda x: _step(t, x))
 
 
 class _Midpoint:
@@ -103,7 +103,7 @@ class _Midpoint:
 
 def _step(t: ThreeLevelTables, x: np.ndarray) -> np.ndarray:
     # faulted lanes compute on zeros (their outputs are overwritten below)
-    f = begin_step(t.number_format, t.consts, x, guard(t, x), INPUT, OUTPUT)
+    f = begin_step(t.nf, t.consts, x, guard(t, x), INPUT, OUTPUT)
     o, k, n, out, fault, ok, zf, inp = f.o, f.k, f.n, f.out, f.fault, f.ok, f.zero, f.inp
     ia, ib, th, om = inp["ia_a"], inp["ib_a"], inp["theta_e_rad"], inp["omega_e_rad_s"]
     uc1, uc2, tref = inp["uc1_v"], inp["uc2_v"], inp["torque_ref_nm"]
@@ -123,9 +123,9 @@ def _step(t: ThreeLevelTables, x: np.ndarray) -> np.ndarray:
     tk = o.mul(om, k.TS_S)
     th1 = o.add(th, tk)
     th2 = o.add(th1, tk)
-    s0, c0 = sincos(o, th)
-    s1, c1 = sincos(o, th1)
-    s2, c2 = sincos(o, th2)
+    s0, c0 = sincos(o, th, k)
+    s1, c1 = sincos(o, th1, k)
+    s2, c2 = sincos(o, th2, k)
     # Clarke, Park with theta(k)
     i_alpha, i_beta = frames.clarke(o, ia, ib, k.INV_SQRT3)
     i_d, i_q = frames.park(o, i_alpha, i_beta, s0, c0)

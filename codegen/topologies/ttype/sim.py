@@ -30,6 +30,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from codegen.model import Model
+from codegen.numfmt import NumberFormat, number_format
 from codegen.records import Record, fields
 from codegen.simulator import api
 from codegen.simulator.driver import (
@@ -43,7 +44,7 @@ from codegen.simulator.driver import (
     trace_class,
 )
 from codegen.simulator.records import SIM_PARAMS, SIM_STATE, SIM_TRACE, SimStruct
-from codegen.topologies.ttype.records import INPUT_DTYPE
+from codegen.topologies.ttype.records import INPUT
 
 #: Segments per control period.
 N_SEG = 7
@@ -66,7 +67,7 @@ STATE = SimStruct("ttype_sim_state_t", "T-type carried state", Record("ttype_sim
 
 TRACE = SimStruct("ttype_sim_trace_t", "T-type trace", Record("ttype_sim_trace", fields("""
     vo_v            f64   1      plant neutral-point voltage at t_k, V
-    t_n_s           f32   1      out.t_n_s (T_N of the decision), s
+    t_n_s           f64   1      out.t_n_s (T_N of the decision), s, exact in every number format
     psi_ref_wb      f32   1      out.psi_ref_wb (the controller's flux reference), Wb
     vo_est_v        f32   1      out.vo_v (the controller's V_o), V
     applied_vector  u16   1      vector applied during [t_k, t_k+1) (decision of k-1)
@@ -144,26 +145,27 @@ def run_closed_loop(ffi: Any, lib: Any, model: Model, progress: Callable[[float]
     return Trace(dt_s=float(model.controller.dt_s), udc_v=float(model.inverter.udc_v), **arrays)
 
 
-def controller_inputs(trace: Any, model: Model) -> np.ndarray:
+def controller_inputs(trace: Any, model: Model, nf: NumberFormat | None = None) -> np.ndarray:
     """The controller-step inputs of every period, exactly as the C loop built them.
 
-    ``INPUT_DTYPE`` records, for replaying through the Python reference and
-    the generated C.  Every float field is one float64 value rounded to
-    float32 as the C cast does: u_c1 = 0.5*Udc + V_o, u_c2 = 0.5*Udc - V_o
+    Input records in the step's number format ``nf`` (default: the config's, float32), for replaying
+    through the Python reference and the generated C.  Every real field is one float64 value converted
+    as the C loop's ``MPC_ENCODE_*`` does (float32: rounded once): u_c1 = 0.5*Udc + V_o, u_c2 = 0.5*Udc - V_o
     (the same double expressions as ttype_sim.c); ``prev_vector`` is the
     previous decision (13 = OOO at k = 0) and ``t_n_prev_s`` its T_N (0 at
     k = 0).
     """
     udc = float(model.inverter.udc_v)
-    rec = motor_inputs(trace, model, INPUT_DTYPE)
-    rec["uc1_v"] = (0.5 * udc + trace.vo_v).astype(np.float32)
-    rec["uc2_v"] = (0.5 * udc - trace.vo_v).astype(np.float32)
+    layout = INPUT.bind(nf or number_format(model.controller.number_format))
+    rec = motor_inputs(trace, model, layout)
+    rec["uc1_v"] = layout.encode("uc1_v", 0.5 * udc + trace.vo_v)
+    rec["uc2_v"] = layout.encode("uc2_v", 0.5 * udc - trace.vo_v)
     prev = np.full(trace.n, OOO, dtype=np.uint16)
     prev[1:] = trace.vector[:-1]
     rec["prev_vector"] = prev
-    t_n_prev = np.zeros(trace.n, dtype=np.float32)
+    t_n_prev = np.zeros(trace.n, dtype=np.float64)
     t_n_prev[1:] = trace.t_n_s[:-1]
-    rec["t_n_prev_s"] = t_n_prev
+    rec["t_n_prev_s"] = layout.encode("t_n_prev_s", t_n_prev)
     return rec
 
 

@@ -21,7 +21,7 @@ from codegen import teststates as common
 from codegen.model import Model
 from codegen.numfmt.float32 import F
 from codegen.topologies.ttype.derive import ThreeLevelTables, guard_limits, t_n_min
-from codegen.topologies.ttype.records import INPUT_DTYPE
+from codegen.topologies.ttype.records import INPUT, INPUT_DTYPE
 
 
 def random_states(model: Model, n: int, seed: int = 1) -> np.ndarray:
@@ -150,4 +150,4 @@ def adversarial_states(model: Model, t: ThreeLevelTables, n_target: int = 200_00
     x["t_n_prev_s"] = np.array([0.0, t_n_min(model), ts / 3], np.float32)[rng.integers(0, 3, n)]
     x["omega_e_rad_s"] = np.where(rng.random(n) < 0.5, 0.0, F(g["OMEGA_GUARD_RAD_S"]))
     parts.append(x)
-    return np.concatenate(parts)
+    return common.in_format(np.concatenate(parts), INPUT.bind(t.nf))

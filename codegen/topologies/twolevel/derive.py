@@ -14,8 +14,9 @@ import numpy as np
 from codegen.kernels.consts import Const, HasConsts, fault_action_constants, leading_constants, sector_constants
 from codegen.kernels.consts import guard_limits as shared_guard_limits
 from codegen.kernels.dq import DqModel
+from codegen.kernels.stepformat import motor_ranges, step_format
 from codegen.model import Model
-from codegen.numfmt import NumberFormat, number_format
+from codegen.numfmt.scaling import Scaling, Signal
 from codegen.topologies.twolevel import vectors
 
 #: A switch table: [condition][sector] -> candidate vectors (V0 first).
@@ -41,6 +42,8 @@ class TwoLevelTables(HasConsts):
     rows: tuple[tuple[int, ...], ...]  # candidate row = condition * n_sectors + sector
     uses_threshold: bool
     number_format: str = "float32"
+    #: fixed point: the Q formats (codegen.numfmt.scaling); None for float32
+    scaling: Scaling | None = None
     #: controller.fault_action: what the gates_off output asks on a fault ("gates-off" | "active-short-circuit")
     fault_action: str = "gates-off"
 
@@ -59,10 +62,11 @@ def guard_limits(model: Model) -> dict[str, float]:
     return shared_guard_limits(model, "UDC_MIN_V", "UDC_MAX_V", 1.0)
 
 
-def _constants(model: Model, nf: NumberFormat) -> list[Const]:
+def _constants(model: Model) -> list[Const]:
+    """The step's constants, float64 (``in_format`` rounds them to the step's format)."""
     m, c = model.motor, model.controller
-    f = nf.const
-    out = leading_constants(nf, guard_limits(model))
+    f = float
+    out = leading_constants(guard_limits(model))
     out += [
         Const("LD_H", f(m.ld_h), "H", "psi_d = Ld i_d + psi_f"),
         Const("LQ_H", f(m.lq_h), "H", "psi_q = Lq i_q"),
@@ -72,7 +76,7 @@ def _constants(model: Model, nf: NumberFormat) -> list[Const]:
         Const("INV_PSI_REF", f(1 / c.psi_ref_wb), "1/Wb", "cost: (|psi| - psi*)/psi*"),
         Const("INV_TN", f(1 / m.rated_torque_nm), "1/(N*m)", "cost: (Te - T*)/T_N"),
         Const("EPS_T_NM", f(c.eps_t_nm), "N*m", "s1-s3: |dT| <= eps_T -> zero vector"),
-    ] + sector_constants(nf)
+    ] + sector_constants()
     if c.predictor == "flux-geometry":
         out += [
             Const("VDT_K", f(2.0 / 3.0 * c.dt_s), "s", "psi+ = psi + V dt, |V| = 2/3 Udc"),
@@ -85,7 +89,20 @@ def _constants(model: Model, nf: NumberFormat) -> list[Const]:
             Const("A_D", f(c.dt_s / m.ld_h), "s/H", "i_d+ = i_d + dt/Ld (u_d - Rs i_d + w Lq i_q)"),
             Const("A_Q", f(c.dt_s / m.lq_h), "s/H", "i_q+ = i_q + dt/Lq (u_q - Rs i_q - w Ld i_d - w psi_f)"),
         ]
-    return out + fault_action_constants(model, nf)
+    return out + fault_action_constants(model)
+
+
+def cost_bounds(model: Model) -> list[Signal]:
+    """Worst cases of the cost and its terms (fixed-point ranges): |e_T| <= (Te_max + T*_guard)/T_N,
+    |e_psi| <= (psi_max + psi*)/psi*, g <= e_T^2 + e_psi^2 (dimensionless)."""
+    m, c = model.motor, model.controller
+    _, sigs = motor_ranges(model)
+    te_max, psi_max = sigs[2].max_abs, sigs[1].max_abs
+    e_t = (te_max + guard_limits(model)["TORQUE_REF_GUARD_NM"]) / m.rated_torque_nm
+    e_p = (psi_max + c.psi_ref_wb) / c.psi_ref_wb
+    return [Signal("e_T (cost torque term)", "", e_t, "motor.rated_torque_nm"),
+            Signal("e_psi (cost flux term)", "", e_p, "controller.psi_ref_wb"),
+            Signal("g (cost)", "", e_t * e_t + e_p * e_p, "motor.rated_torque_nm")]
 
 
 def table_layout(strategy: str) -> tuple[int, int, bool]:
@@ -114,13 +131,13 @@ def derive_two_level(model: Model, switch_table: SwitchTable | None = None) -> T
             raise ValueError(f"switch table for {c.strategy} must be {n_cond} x {n_sec}")
         rows = tuple(tuple(cell) for row in switch_table for cell in row)
     ux, uy = vectors.unit_vectors()
-    nf = number_format(c.number_format)
+    nf, consts = step_format(model, _constants(model), cost_bounds(model))
     return TwoLevelTables(
         prefix=model.prefix,
         strategy=c.strategy,
         predictor=c.predictor,
         delay_compensation=c.delay_compensation,
-        consts=tuple(_constants(model, nf)),
+        consts=consts,
         ux=tuple(nf.const(v) for v in ux),
         uy=tuple(nf.const(v) for v in uy),
         vec_to_sw=vectors.VEC_TO_SW,
@@ -131,5 +148,6 @@ def derive_two_level(model: Model, switch_table: SwitchTable | None = None) -> T
         rows=rows,
         uses_threshold=thr,
         number_format=nf.name,
+        scaling=nf.scaling,
         fault_action=model.controller.fault_action,
     )

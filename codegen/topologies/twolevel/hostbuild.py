@@ -13,4 +13,4 @@ def build_host_library(model: Model, t: TwoLevelTables, with_sim: bool = True) -
     """Render the host profile (+ the closed loop), compile strictly, load (cached)."""
     sim = simulator_of("codegen.topologies.twolevel.sim") if with_sim else None
     return build_step_library(model, "_mpc_twolevel", render_two_level(model, t, "host"), render_cdef(model, t),
-                              (INPUT, OUTPUT), sim)
+                              (INPUT, OUTPUT), sim, t.nf)

@@ -17,6 +17,7 @@ import numpy as np
 
 from codegen.hostbuild import HostLib
 from codegen.model import STRATEGIES_BY_TOPOLOGY, Model
+from codegen.teststates import in_format
 from codegen.topologies.twolevel import fwstates, scenarios, sim, switch_tables
 from codegen.topologies.twolevel import reference as ref
 from codegen.topologies.twolevel import report as report_md
@@ -47,15 +48,15 @@ def host_library(model: Model, tables: Any, with_sim: bool = False) -> HostLib:
 
 
 def closed_loop_states(model: Model, lib: HostLib) -> np.ndarray:
-    return sim.controller_inputs(sim.run_closed_loop(lib.ffi, lib.lib, model), model)
+    return sim.controller_inputs(sim.run_closed_loop(lib.ffi, lib.lib, model), model, lib.records.input.nf)
 
 
 def adversarial_states(model: Model, tables: Any, n: int) -> np.ndarray:
     return test_states.adversarial_states(model, tables, ref.step_batch, n_target=n)
 
 
-def random_states(model: Model, n: int, seed: int) -> np.ndarray:
-    return test_states.random_states(model, n, seed=seed)
+def random_states(model: Model, tables: Any, n: int, seed: int) -> np.ndarray:
+    return in_format(test_states.random_states(model, n, seed=seed), input_record.bind(tables.nf))
 
 
 def trajectory(model: Model, progress: Progress | None = None) -> Trajectory:

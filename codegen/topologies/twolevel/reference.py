@@ -23,29 +23,28 @@ from codegen.kernels.consts import Constants
 from codegen.kernels.guard import evaluate, gates_off
 from codegen.kernels.sector import sector12
 from codegen.kernels.trig import sincos
-from codegen.numfmt import number_format
 from codegen.topologies.twolevel.derive import DQ, TwoLevelTables
 from codegen.topologies.twolevel.records import FAULT, GUARD, INPUT, N_VECTORS, OUTPUT
 
 
 def guard(t: TwoLevelTables, x: np.ndarray) -> np.ndarray:
     """Fault bits per state (numerics.md: non-finite or out-of-range inputs)."""
-    return evaluate(number_format(t.number_format).ops, GUARD, FAULT, Constants(t.consts), x)
+    return evaluate(t.nf.ops, GUARD, FAULT, Constants(t.consts), x)
 
 
 def step_batch(t: TwoLevelTables, x: np.ndarray) -> np.ndarray:
     """Run the step on every record of ``x`` (the input record); return output records."""
-    return run_batch(x, INPUT.bind(number_format(t.number_format)).dtype, lambda x: _step(t, x))
+    return run_batch(x, INPUT.bind(t.nf).dtype, lambda x: _step(t, x))
 
 
 def _step(t: TwoLevelTables, x: np.ndarray) -> np.ndarray:
     # faulted lanes compute on zeros (their outputs are overwritten below)
-    f = begin_step(t.number_format, t.consts, x, guard(t, x), INPUT, OUTPUT)
+    f = begin_step(t.nf, t.consts, x, guard(t, x), INPUT, OUTPUT)
     o, k, n, out, fault, ok, zf, inp = f.o, f.k, f.n, f.out, f.fault, f.ok, f.zero, f.inp
     ia, ib, th, om = inp["ia_a"], inp["ib_a"], inp["theta_e_rad"], inp["omega_e_rad_s"]
     udc, tref, prev_sw = inp["udc_v"], inp["torque_ref_nm"], inp["prev_sw"]
 
-    s, c = sincos(o, th)
+    s, c = sincos(o, th, k)
     i_alpha, i_beta = frames.clarke(o, ia, ib, k.INV_SQRT3)
     i_d, i_q = frames.park(o, i_alpha, i_beta, s, c)
     model = DQ.resolve(k)

@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from codegen.model import Model
+from codegen.numfmt import NumberFormat, number_format
 from codegen.records import Record, fields
 from codegen.simulator import api
 from codegen.simulator.driver import (
@@ -39,7 +40,7 @@ from codegen.simulator.driver import (
     trace_class,
 )
 from codegen.simulator.records import SIM_PARAMS, SIM_STATE, SIM_TRACE, SimStruct
-from codegen.topologies.twolevel.records import INPUT_DTYPE
+from codegen.topologies.twolevel.records import INPUT
 
 PARAMS = SimStruct("twolevel_sim_params_t", "two-level simulator parameters", Record("twolevel_sim_params", fields("""
     substeps            i32   1  RK4 sub-steps per period (dt_s/substeps <= 1 us)
@@ -106,17 +107,18 @@ def run_closed_loop(ffi: Any, lib: Any, model: Model, progress: Callable[[float]
     return Trace(dt_s=float(model.controller.dt_s), **arrays)
 
 
-def controller_inputs(trace: Any, model: Model) -> np.ndarray:
+def controller_inputs(trace: Any, model: Model, nf: NumberFormat | None = None) -> np.ndarray:
     """The controller-step inputs of every period, exactly as the C loop built them.
 
-    Returns an ``INPUT_DTYPE`` record array (the states a closed-loop run fed
-    to the step), for replaying through the Python reference and the
-    generated C (numerics.md "Test states" (a)).  Every float field is the
-    float64 sample rounded once to float32, as the C cast does;
+    Returns input records in the step's number format ``nf`` (default: the config's, float32): the
+    states a closed-loop run fed to the step, for replaying through the Python reference and the
+    generated C (numerics.md "Test states" (a)).  Every real field is the float64 sample converted
+    as the C loop's ``MPC_ENCODE_*`` does (float32: rounded once);
     ``prev_sw`` is the previous decision (0 before the first period).
     """
-    rec = motor_inputs(trace, model, INPUT_DTYPE)
-    rec["udc_v"] = np.float32(model.inverter.udc_v)
+    layout = INPUT.bind(nf or number_format(model.controller.number_format))
+    rec = motor_inputs(trace, model, layout)
+    rec["udc_v"] = layout.encode("udc_v", float(model.inverter.udc_v))
     prev_sw = np.zeros(trace.n, dtype=np.uint16)
     prev_sw[1:] = trace.sw[:-1]
     rec["prev_sw"] = prev_sw

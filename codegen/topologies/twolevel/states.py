@@ -20,14 +20,15 @@ from codegen import teststates as common
 from codegen.model import Model
 from codegen.numfmt.float32 import F
 from codegen.topologies.twolevel.derive import TwoLevelTables, guard_limits
-from codegen.topologies.twolevel.records import INPUT_DTYPE
+from codegen.topologies.twolevel.records import INPUT, INPUT_DTYPE
 
 #: the reference step over a batch (``reference.step_batch``)
 StepBatch = Callable[[TwoLevelTables, np.ndarray], np.ndarray]
 
 
 def random_states(model: Model, n: int, seed: int = 1) -> np.ndarray:
-    """``n`` random states over the operating range (about 3 % trip the guard)."""
+    """``n`` random states over the operating range (about 3 % trip the guard), float32 SI values
+    (``common.in_format`` converts them to the step's format)."""
     rng = np.random.default_rng(seed)
     g = guard_limits(model)
     x = np.zeros(n, INPUT_DTYPE)
@@ -68,7 +69,8 @@ def threshold_states(x: np.ndarray, t: TwoLevelTables, reference_step: StepBatch
 
 def adversarial_states(model: Model, t: TwoLevelTables, reference_step: StepBatch, n_target: int = 200_000,
                        seed: int = 2) -> np.ndarray:
-    """Adversarial states; ``reference_step(t, x)`` is used to place T* exactly at the threshold."""
+    """Adversarial states in the step's format (``t.nf``); ``reference_step(t, x)`` is used to place T*
+    exactly at the threshold."""
     rng = np.random.default_rng(seed)
     g = guard_limits(model)
     parts: list[np.ndarray] = []
@@ -91,7 +93,7 @@ def adversarial_states(model: Model, t: TwoLevelTables, reference_step: StepBatc
     parts.append(x)
 
     # T* exactly at the threshold and one ulp either side (s1-s3 decision border)
-    x = base(n_target // 5)
+    x = common.in_format(base(n_target // 5), INPUT.bind(t.nf))
     threshold_states(x, t, reference_step, rng)
     parts.append(x)
 
@@ -117,4 +119,4 @@ def adversarial_states(model: Model, t: TwoLevelTables, reference_step: StepBatc
     x["prev_sw"][x["prev_sw"] >= 8] = np.array([8, 65535], np.uint16)[x["prev_sw"][x["prev_sw"] >= 8] - 8]
     x["omega_e_rad_s"] = np.where(rng.random(len(x)) < 0.5, 0.0, F(g["OMEGA_GUARD_RAD_S"]))
     parts.append(x)
-    return np.concatenate(parts)
+    return np.concatenate([common.in_format(p, INPUT.bind(t.nf)) for p in parts])

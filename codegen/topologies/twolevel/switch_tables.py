@@ -26,7 +26,6 @@ from codegen.errors import ConfigError
 from codegen.kernels.consts import Constants
 from codegen.kernels.sector import sector12
 from codegen.model import Model
-from codegen.numfmt import number_format
 from codegen.topologies.twolevel import tables_file
 from codegen.topologies.twolevel.derive import SwitchTable, TwoLevelTables, derive_two_level
 from codegen.topologies.twolevel.reference import step_batch
@@ -43,7 +42,8 @@ def thin_cells(counts: np.ndarray) -> np.ndarray:
 
 def training_model(model: Model) -> Model:
     """The conventional variant whose closed-loop run is the training data (host target, no tables file)."""
-    return model.with_controller(strategy="conventional", tables="published", tables_file=None).replace(
+    return model.with_controller(strategy="conventional", tables="published", tables_file=None,
+                                 number_format="float32", fixed_q=None).replace(
         target="host")
 
 
@@ -56,10 +56,10 @@ def utilisation_counts(model: Model, progress: Callable[[float], None] | None = 
     t = derive_two_level(train)
     lib = build_host_library(train, t, with_sim=True)
     trace = run_closed_loop(lib.ffi, lib.lib, train, progress=progress)
-    states = controller_inputs(trace, train)
+    states = controller_inputs(trace, train, t.nf)
     out = step_batch(t, states)
     k = Constants(t.consts)
-    ops = number_format(t.number_format).ops
+    ops = t.nf.ops
     d_t = states["torque_ref_nm"] - out["te_est_nm"]
     d_psi = k.PSI_REF_WB - out["psi_est_wb"]
     mask = (np.abs(d_t) > k.EPS_T_NM) & (out["fault"] == 0)

@@ -133,7 +133,7 @@ static int take_decision(const ttype_sim_params_t *p, const mpc_output_t *out,
         return -1;
     }
     for (i = 0; i < TTYPE_PLANT_N_SEG; ++i) {
-        const double d = (double)out->seg_s[i];
+        const double d = (double)MPC_DECODE_seg_s(out->seg_s[i]);
         if (!in_range((long)out->states[i], TTYPE_PLANT_N_STATES) || !isfinite(d) || d < 0.0) {
             return -1;
         }
@@ -191,10 +191,10 @@ static void period_input(const ttype_sim_params_t *p, const ttype_sim_state_t *s
     /* 4. controller inputs, cast to float */
     memset(in, 0, sizeof *in);
     SIM_PERIOD_MOTOR_INPUTS(*in, *v);
-    in->uc1_v = (float)(0.5 * p->common.udc_v + x->vo_v);
-    in->uc2_v = (float)(0.5 * p->common.udc_v - x->vo_v);
+    in->uc1_v = MPC_ENCODE_uc1_v(0.5 * p->common.udc_v + x->vo_v);
+    in->uc2_v = MPC_ENCODE_uc2_v(0.5 * p->common.udc_v - x->vo_v);
     in->prev_vector = (uint16_t)state->applied_vector;
-    in->t_n_prev_s = (float)state->applied_t_n_s;
+    in->t_n_prev_s = MPC_ENCODE_t_n_prev_s(state->applied_t_n_s);
 }
 
 /* Steps 5.-7. and the commit of period k (trace entry j) with the decision `out`. */
@@ -211,11 +211,12 @@ static int period_finish(const ttype_sim_params_t *p, ttype_sim_state_t *state,
 
     /* 5. record the sample instant, the decision, the applied period */
     sim_period_record(&tr->common, j, &p->common, &state->common, &x->motor, v, out->vector,
-                      out->n_eval, out->fault, out->te_est_nm, out->psi_est_wb);
+                      out->n_eval, out->fault, (float)MPC_DECODE_te_est_nm(out->te_est_nm),
+                      (float)MPC_DECODE_psi_est_wb(out->psi_est_wb));
     if (tr->vo_v != NULL) tr->vo_v[j] = x->vo_v;
-    if (tr->t_n_s != NULL) tr->t_n_s[j] = out->t_n_s;
-    if (tr->psi_ref_wb != NULL) tr->psi_ref_wb[j] = out->psi_ref_wb;
-    if (tr->vo_est_v != NULL) tr->vo_est_v[j] = out->vo_v;
+    if (tr->t_n_s != NULL) tr->t_n_s[j] = (float)MPC_DECODE_t_n_s(out->t_n_s);
+    if (tr->psi_ref_wb != NULL) tr->psi_ref_wb[j] = (float)MPC_DECODE_psi_ref_wb(out->psi_ref_wb);
+    if (tr->vo_est_v != NULL) tr->vo_est_v[j] = (float)MPC_DECODE_vo_v(out->vo_v);
     if (tr->applied_vector != NULL) tr->applied_vector[j] = (uint16_t)state->applied_vector;
     if (tr->leg_changes != NULL) tr->leg_changes[j] = (uint16_t)changes;
     for (i = 0; i < TTYPE_PLANT_N_SEG; ++i) {
@@ -244,7 +245,7 @@ static int period_finish(const ttype_sim_params_t *p, ttype_sim_state_t *state,
     /* commit period k */
     state->last_state = last;
     state->applied_vector = (int32_t)out->vector;
-    state->applied_t_n_s = (double)out->t_n_s;
+    state->applied_t_n_s = (double)MPC_DECODE_t_n_s(out->t_n_s);
     for (i = 0; i < TTYPE_PLANT_N_SEG; ++i) {
         state->applied_states[i] = next_st[i];
         state->applied_seg_s[i] = next_seg[i];

@@ -77,10 +77,10 @@ static void period_input(const twolevel_sim_params_t *p, const twolevel_sim_stat
     /* 1.-3. */
     sim_period_sample(&p->common, &state->common, x, w_ref, load, v);
 
-    /* 4. controller inputs, cast to float as a real controller sees them */
+    /* 4. controller inputs in the step's number format, as a real controller sees them */
     memset(in, 0, sizeof *in);
     SIM_PERIOD_MOTOR_INPUTS(*in, *v);
-    in->udc_v = (float)p->common.udc_v;
+    in->udc_v = MPC_ENCODE_udc_v(p->common.udc_v);
     in->prev_sw = (uint16_t)state->prev_sw;
 }
 
@@ -95,7 +95,8 @@ static int period_finish(const twolevel_sim_params_t *p, twolevel_sim_state_t *s
 
     /* 5. record the sample instant */
     sim_period_record(&tr->common, j, &p->common, &state->common, x, v, out->vector, out->n_eval,
-                      out->fault, out->te_est_nm, out->psi_est_wb);
+                      out->fault, (float)MPC_DECODE_te_est_nm(out->te_est_nm),
+                      (float)MPC_DECODE_psi_est_wb(out->psi_est_wb));
     if (tr->sw != NULL) tr->sw[j] = (uint16_t)out->sw;
     if (tr->applied_sw != NULL) tr->applied_sw[j] = (uint16_t)(sw_apply & 0xFFFF);
 

@@ -1,0 +1,91 @@
+"""The step's number format, bound to its scaling, and its constants in that format.
+
+Both topologies derive their tables through :func:`step_format`: the
+constants are computed in float64 by the topology, the format (for fixed
+point: its Q formats, ``codegen.numfmt.scaling``) is chosen from every
+constant and from the signal ranges the config implies, and each constant
+is rounded once to it.  Ranges (float64, SI):
+
+* current: the dq magnitude of phase currents at the trip limit, 2/sqrt(3) i_trip;
+* flux: psi_f + max(L_d, L_q) 2/sqrt(3) i_trip;
+* torque: 1.5 p flux-bound current-bound;
+* voltage: the larger of udc_max_v and the back-EMF at the speed guard;
+* the topology's cost bound (its worst case).
+
+A signal or constant the format cannot hold is a :class:`ConfigError`
+naming the config field, its value, the signal, its range and the format.
+"""
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+
+from codegen.errors import ConfigError
+from codegen.kernels.consts import Const, in_format
+from codegen.kernels.trig import sincos_constants
+from codegen.model import Model
+from codegen.numfmt import NumberFormat, number_format
+from codegen.numfmt.scaling import BaseRanges, RepresentationError, Signal
+
+__all__ = ["step_format", "motor_ranges", "CONST_FIELDS"]
+
+#: the config field each constant comes from (named by a representation error)
+CONST_FIELDS: dict[str, str] = {
+    "I_TRIP_A": "inverter.i_trip_a", "UDC_MIN_V": "inverter.udc_min_v", "UDC_MAX_V": "inverter.udc_max_v",
+    "UC_MIN_V": "inverter.udc_min_v", "UC_MAX_V": "inverter.udc_max_v", "OMEGA_GUARD_RAD_S": "motor.rated_speed_rpm",
+    "TORQUE_REF_GUARD_NM": "speed_loop.limit_nm", "LD_H": "motor.ld_h", "LQ_H": "motor.lq_h", "LS_H": "motor.ld_h",
+    "PSI_F_WB": "motor.psi_f_wb", "PSI_F_SQ": "motor.psi_f_wb", "TE_K": "motor.pole_pairs",
+    "TE_PSI": "motor.psi_f_wb", "INV_TE_PSI": "motor.psi_f_wb", "TE_GEO_K": "motor.ld_h",
+    "PSI_REF_WB": "controller.psi_ref_wb", "INV_PSI_REF": "controller.psi_ref_wb",
+    "INV_TN": "motor.rated_torque_nm", "EPS_T_NM": "controller.eps_t_nm", "RS_OHM": "motor.rs_ohm",
+    "VDT_K": "controller.dt_s", "A_D": "controller.dt_s", "A_Q": "controller.dt_s", "A_S": "controller.dt_s",
+    "TS_S": "controller.dt_s", "INV_TS": "controller.dt_s", "TS3_S": "controller.dt_s", "TS6_S": "controller.dt_s",
+    "TN_MIN_S": "controller.t_n_min_s", "K_VO": "inverter.c_f", "TWO_C": "inverter.c_f",
+    "LAMBDA_PSI": "controller.lambda_psi_nm_per_wb", "LAMBDA_VO": "controller.lambda_vo_nm_per_v",
+    "ASC_OMEGA_MIN_RAD_S": "controller.asc_min_speed_rpm",
+}
+#: constants whose precision is a property of the sin/cos approximation (tested), not checked per constant
+_APPROXIMATION = frozenset(name for name, *_ in sincos_constants())
+
+
+def motor_ranges(model: Model) -> tuple[BaseRanges, list[Signal]]:
+    """The ranges that fix the bases, and the motor signals of every step (float64, SI)."""
+    m, inv = model.motor, model.inverter
+    i_max = 2.0 / math.sqrt(3.0) * inv.i_trip_a
+    flux = m.psi_f_wb + max(m.ld_h, m.lq_h) * i_max
+    omega = 5.0 * m.rated_speed_rpm * 2.0 * math.pi / 60.0 * m.pole_pairs  # the speed guard
+    volts = max(inv.udc_max_v, omega * flux)
+    base = BaseRanges(i_max_a=inv.i_trip_a, u_max_v=volts, omega_max_rad_s=omega, flux_max_wb=flux)
+    sigs = [
+        Signal("i_dq (2/sqrt(3) i_trip)", "A", i_max, "inverter.i_trip_a"),
+        Signal("psi (psi_f + L i_max)", "Wb", flux, "inverter.i_trip_a"),
+        Signal("te (1.5 p psi_max i_max)", "N*m", 1.5 * m.pole_pairs * flux * i_max, "inverter.i_trip_a"),
+        Signal("back-EMF (omega_guard psi_max)", "V", omega * flux, "motor.rated_speed_rpm"),
+    ]
+    return base, sigs
+
+
+def _value(model: Model, field: str) -> object:
+    obj: object = model
+    for part in field.split("."):
+        obj = getattr(obj, part, None)
+    return obj
+
+
+def step_format(model: Model, consts: Iterable[Const], extra: Iterable[Signal] = ()) -> tuple[
+        NumberFormat, tuple[Const, ...]]:
+    """(the step's number format, its constants in that format) from float64 constants ``consts`` and
+    the topology's ``extra`` signal ranges (its cost bound).  ConfigError if the format cannot hold them."""
+    consts = list(consts)
+    c = model.controller
+    base, sigs = motor_ranges(model)
+    sigs += [Signal(k.name, k.unit, abs(float(k.value)), CONST_FIELDS.get(k.name, "controller.number_format"),
+                    exact=k.name not in _APPROXIMATION) for k in consts]
+    sigs += list(extra)
+    try:
+        nf = number_format(c.number_format).for_step(sigs, base, c.fixed_q)
+    except RepresentationError as exc:
+        field = "controller.fixed_q" if c.fixed_q is not None else exc.field
+        raise ConfigError(model.source, field, _value(model, field),
+                          f"{exc} ({c.number_format} format; widen the range or change the config)") from None
+    return nf, in_format(nf, consts)

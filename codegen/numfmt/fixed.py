@@ -1,0 +1,200 @@
+"""The fixed-point number format: int32 storage, int64 intermediates, scaled per-unit Q formats.
+
+A real value is an int32 count in the Q format of its unit
+(``codegen.numfmt.scaling``): every value of the step shares the fractional
+bit count ``G`` of its per-unit value, so one integer operation per C
+operation serves every unit.  Each operation has one defined rounding and
+saturates to int32 (numerics.md "Fixed-point path"):
+
+=========  ==============================================================
+add, sub   ``sat(a +- b)`` (int64 sum)
+neg, abs   ``sat(-a)``, ``sat(|a|)`` (``-INT32_MIN`` saturates)
+mul        ``sat(floor((a*b + 2^(G-1)) / 2^G))``: round half up
+div        ``sat(floor((a*2^G)/b + 1/2))``, sign of ``b`` folded into the
+           numerator; ``b == 0`` gives 0 (the step never divides by 0)
+sqrt       ``floor(sqrt(a * 2^G))`` exactly (``a <= 0`` gives 0)
+trunc_int  ``a / 2^G`` truncated toward zero (C's integer division)
+from_int   ``sat(n * 2^G)``
+=========  ==============================================================
+
+``FixedOps`` models each with numpy int64, exactly; the C spelling is
+``templates/numfmt/fixed.j2`` (small helper functions with no undefined or
+implementation-defined behaviour: no signed overflow, no shift of a
+negative value).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .scaling import INT32_MAX, INT32_MIN, BaseRanges, Scaling, Signal, choose_scaling
+
+__all__ = ["FixedOps", "Fixed", "FIXED", "isqrt64"]
+
+
+def _sat(x: Any) -> np.ndarray:
+    return np.clip(np.asarray(x, np.int64), INT32_MIN, INT32_MAX).astype(np.int32)
+
+
+def _i64(x: Any) -> np.ndarray:
+    return np.asarray(x, np.int64)
+
+
+def isqrt64(x: Any) -> np.ndarray:
+    """floor(sqrt(x)) of non-negative int64 values below 2^62, exactly (float estimate, then corrected)."""
+    x = _i64(x)
+    r = np.floor(np.sqrt(x.astype(np.float64))).astype(np.int64)
+    for _ in range(2):  # the float estimate is off by at most one
+        r = np.where(r * r > x, r - 1, r)
+        r = np.where((r + 1) * (r + 1) <= x, r + 1, r)
+    return r
+
+
+class FixedOps:
+    """The reference's arithmetic in the fixed-point format: numpy int64, saturated to int32."""
+
+    def __init__(self, scaling: Scaling) -> None:
+        self.g = scaling.frac_bits
+        self.scaling = scaling
+        self.one = np.int64(1) << self.g
+        self.half = np.int64(1) << (self.g - 1)
+
+    def const(self, x: float) -> np.int32:
+        """A dimensionless literal (round half up)."""
+        return np.int32(self.scaling.const(x, ""))
+
+    def array(self, values: Any) -> np.ndarray:
+        return np.asarray(values, dtype=np.int32)
+
+    def zeros(self, shape: Any) -> np.ndarray:
+        return np.zeros(shape, np.int32)
+
+    def add(self, a: Any, b: Any) -> np.ndarray:
+        return _sat(_i64(a) + _i64(b))
+
+    def sub(self, a: Any, b: Any) -> np.ndarray:
+        return _sat(_i64(a) - _i64(b))
+
+    def mul(self, a: Any, b: Any) -> np.ndarray:
+        # numpy's >> on int64 is an arithmetic shift: floor division by 2^G
+        return _sat((_i64(a) * _i64(b) + self.half) >> self.g)
+
+    def div(self, a: Any, b: Any) -> np.ndarray:
+        a, b = np.broadcast_arrays(_i64(a), _i64(b))
+        n = np.where(b < 0, -a, a) * self.one
+        d = np.abs(b)
+        safe = np.where(d == 0, 1, d)
+        q = np.floor_divide(2 * n + safe, 2 * safe)
+        return _sat(np.where(d == 0, 0, q))
+
+    def neg(self, a: Any) -> np.ndarray:
+        return _sat(-_i64(a))
+
+    def abs(self, a: Any) -> np.ndarray:
+        return _sat(np.abs(_i64(a)))
+
+    def sqrt(self, a: Any) -> np.ndarray:
+        a = _i64(a)
+        return _sat(np.where(a > 0, isqrt64(np.maximum(a, 0) << self.g), 0))
+
+    def lt(self, a: Any, b: Any) -> np.ndarray:
+        return np.asarray(a < b)
+
+    def le(self, a: Any, b: Any) -> np.ndarray:
+        return np.asarray(a <= b)
+
+    def gt(self, a: Any, b: Any) -> np.ndarray:
+        return np.asarray(a > b)
+
+    def ge(self, a: Any, b: Any) -> np.ndarray:
+        return np.asarray(a >= b)
+
+    def eq(self, a: Any, b: Any) -> np.ndarray:
+        return np.asarray(a == b)
+
+    def ne(self, a: Any, b: Any) -> np.ndarray:
+        return np.asarray(a != b)
+
+    def where(self, cond: Any, a: Any, b: Any) -> np.ndarray:
+        return np.where(cond, a, b).astype(np.int32)
+
+    def select(self, conds: list[Any], choices: list[Any], default: Any) -> np.ndarray:
+        return np.select(conds, choices, default).astype(np.int32)
+
+    def trunc_int(self, a: Any) -> np.ndarray:
+        a = _i64(a)
+        m = np.abs(a) >> self.g
+        return np.where(a < 0, -m, m).astype(np.int32)
+
+    def from_int(self, n: Any) -> np.ndarray:
+        return _sat(_i64(n) << self.g)
+
+
+@dataclass(frozen=True)
+class Fixed:
+    """The fixed-point backend of :class:`codegen.numfmt.NumberFormat`.
+
+    Without a scaling it gives the layouts only (dtypes, C types, value kinds:
+    the records, the wire schema); :meth:`scaled` binds the step's
+    :class:`Scaling`, which the constants, the encodings and the ops need.
+    """
+
+    scaling: Scaling | None = None
+    name: str = "fixed"
+    real_dtype: np.dtype = np.dtype(np.int32)
+    bits_dtype: np.dtype = np.dtype(np.uint32)
+    c_type: str = "int32_t"
+    macros: str = "numfmt/fixed.j2"
+    value_kind: str = "MPC_VALUE_I32"
+    value_reader: str = "mpc_i32_value"
+    #: |theta_e| <= 8 rad (a wrapped angle, and its extrapolation by two periods): the angle is a
+    #: dimensionless per-unit value, so a wide guard would cost every dimensionless signal its bits
+    angle_guard_rad: float = 8.0
+    _ops: list = field(default_factory=list, compare=False, repr=False)
+
+    def for_step(self, signals: list[Signal], base: BaseRanges, global_q: int | None) -> Fixed:
+        return Fixed(choose_scaling(signals, base, global_q))
+
+    def scaled(self, scaling: Scaling | None) -> Fixed:
+        if scaling is None:
+            raise ValueError("the fixed-point format needs the step's scaling (derived with its tables)")
+        return Fixed(scaling)
+
+    def _sc(self) -> Scaling:
+        if self.scaling is None:
+            raise ValueError("fixed-point values need the step's scaling; use the derived tables' format")
+        return self.scaling
+
+    @property
+    def ops(self) -> FixedOps:
+        if not self._ops:
+            self._ops.append(FixedOps(self._sc()))
+        return self._ops[0]
+
+    def const(self, x: float, unit: str = "") -> np.int32:
+        if x == 0.0:
+            return np.int32(0)
+        return np.int32(self._sc().const(x, unit))
+
+    def literal(self, x: float | np.generic) -> str:
+        return f"INT32_C({int(x)})" if int(x) != INT32_MIN else "(-INT32_C(2147483647) - 1)"  # type: ignore[arg-type]
+
+    def c_value(self, x: float | np.generic) -> str:
+        return self.literal(x)
+
+    def encode(self, unit: str, x: Any) -> np.ndarray:
+        return self._sc().encode(unit, x)
+
+    def decode(self, unit: str, n: Any) -> np.ndarray:
+        return self._sc().decode(unit, n)
+
+    def template_values(self) -> dict[str, object]:
+        sc = self._sc()
+        return {"q_frac_bits": sc.frac_bits,
+                "q_lits": {"0": "INT32_C(0)", "0.5": self.literal(sc.const(0.5, "")),
+                           "1": self.literal(sc.const(1.0, ""))}}
+
+
+FIXED = Fixed()
