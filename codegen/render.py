@@ -18,7 +18,7 @@ from codegen import __version__
 from codegen.kernels.consts import Const
 from codegen.model import Model
 from codegen.numfmt import NumberFormat, number_format
-from codegen.numfmt.float32 import c_float_literal
+from codegen.numfmt.float32 import FLOAT32, c_float_literal
 from codegen.records import REAL, Record
 from codegen.resources import templates_dir
 
@@ -144,9 +144,14 @@ def render_step_cdef(ctx: dict) -> str:
     return render_files({"cdef": "common/cdef.h.j2"}, ctx)["cdef"]
 
 
+#: the speed PI's number format, whatever the step's: the outer loop is not part of the verified
+#: MPC step, and a fixed-point MPC step keeps its float32 speed loop (no FPU: software float)
+SPEED_PI_FORMAT = FLOAT32
+
+
 def speed_pi_constants(model: Model) -> list[Const]:
     """Constants of the generated speed PI (``speed_loop``, ``controller.dt_s``), rounded once."""
-    nf = number_format(model.controller.number_format)
+    nf = SPEED_PI_FORMAT
     sl = model.speed_loop
     return [
         Const("SPI_KP", nf.const(sl.kp), "N*m*s/rad", "speed PI proportional gain kp"),
@@ -156,10 +161,12 @@ def speed_pi_constants(model: Model) -> list[Const]:
 
 
 def render_speed_pi(model: Model, target: str) -> dict[str, str]:
-    """File name -> text of the portable speed PI, ``<prefix>_speed_pi.h`` and ``.c``."""
-    nf = number_format(model.controller.number_format)
+    """File name -> text of the portable speed PI, ``<prefix>_speed_pi.h`` and ``.c`` (float32,
+    ``SPEED_PI_FORMAT``)."""
+    nf = SPEED_PI_FORMAT
     sl = model.speed_loop
-    ctx = {**base_context(model, target), "consts": speed_pi_constants(model), "real": nf.c_type,
+    ctx = {**base_context(model, target), "number_format": nf.name, "numfmt": nf.macros,
+           "consts": speed_pi_constants(model), "real": nf.c_type,
            "kp": sl.kp, "ki": sl.ki, "limit_nm": sl.limit_nm, "dt_s": model.controller.dt_s}
     p = model.prefix
     return render_files({f"{p}_speed_pi.h": "common/speed_pi.h.j2", f"{p}_speed_pi.c": "common/speed_pi.c.j2"}, ctx)

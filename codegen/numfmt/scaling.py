@@ -194,7 +194,9 @@ def choose_scaling(signals: Iterable[Signal], base: BaseRanges, global_q: int | 
             raise RepresentationError(worst.name, worst.field, (
                 f"signal {worst.name} (|x| up to {worst.max_abs:.6g} {worst.unit}) needs {need} integer bits "
                 f"of the per-unit format: {g} fractional bits left, fewer than {MIN_FRAC_BITS}"))
-    for s in sigs:
+    # the worst offender first: ranges beyond the format by how far, then constants by fewest counts
+    for s in sorted(sigs, key=lambda s: (-(s.max_abs / sc.largest(s.unit)),
+                                         s.max_abs / sc.resolution(s.unit) if s.exact and s.max_abs > 0 else 1e300)):
         _check(s, sc)
     return sc
 
