@@ -1,4 +1,4 @@
-"""``mpcgen`` command line: generate, verify, simulate, tables, bench, firmware.
+"""``mpcgen`` command line: generate, verify, simulate, tables, bench, firmware, report.
 
 Exit codes: 0 success; 1 the job ran and failed (mismatches, build failure);
 2 bad input (config, arguments) -- one line on stderr, no traceback.
@@ -201,6 +201,40 @@ def cmd_firmware(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+# ---------------------------------------------------------------- report
+def cmd_report(args: argparse.Namespace) -> int:
+    import tempfile
+
+    from codegen.stages.quantisation import analyse, fixed_twin
+    from codegen.stages.quantreport import markdown, plots, report_name
+
+    model = _load(args)
+    cliargs.at_least("--states", args.states, 1)
+    cliargs.output_file("--json", args.json)
+    out = cliargs.output_dir("-o", args.output) if args.output else None
+    log = _log(args.quiet)
+    if model.controller.number_format != "fixed":
+        log(f"report: {model.name} is {model.controller.number_format}; analysing its fixed-point twin "
+            "(controller.number_format = fixed)")
+        model = fixed_twin(model)
+    strategies = _strategies(args, model)
+    with tempfile.TemporaryDirectory(prefix="mpcgen-report-") as tmp:
+        traces = Path(tmp) if out is not None else None
+        data = analyse(model, strategies, random_states=args.states, log=log, traces=traces)
+        files = plots(model, data, traces, out) if out is not None else None
+    text = markdown(model, data, files)
+    if out is not None:
+        (out / report_name(model)).write_text(text)
+        print(out / report_name(model))
+        for names in (files or {}).values():
+            for name in names:
+                print(out / name)
+    else:
+        print(text, end="")
+    _write_json(args.json, data)
+    return EXIT_OK
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="mpcgen", description="FCS-MPC code generator for PMSM drives: generate, verify bit for bit, simulate, benchmark.")
     p.add_argument("--version", action="version", version=f"mpcgen {__version__}")
@@ -256,6 +290,16 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument("--board", required=True, help="stm32h743, tms320f28377, qemu-m7 or host")
     f.add_argument("-o", "--output", required=True, help="output directory")
     f.set_defaults(func=cmd_firmware)
+
+    r = sub.add_parser("report", help="quantisation report of the fixed-point controller (formats, errors, "
+                                      "agreement with float32, closed loop)")
+    _add_config_args(r)
+    r.add_argument("--strategies", help="comma list (default: all of the topology)")
+    r.add_argument("--states", type=int, default=20_000, help="random states per strategy (default 20000)")
+    r.add_argument("-o", "--output", help="directory for <prefix>_quantisation.md and the PNG plots "
+                                          "(default: the markdown on stdout)")
+    r.add_argument("--json", help="write the analysis as JSON")
+    r.set_defaults(func=cmd_report)
     return p
 
 

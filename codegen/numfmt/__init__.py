@@ -145,6 +145,8 @@ def number_format(name: str) -> NumberFormat:
 
 from .fixed import FIXED  # noqa: E402  (the registry needs the Protocol above)
 from .float32 import FLOAT32  # noqa: E402
+from .float64 import FLOAT64  # noqa: E402
 
-#: Every number format, by ``controller.number_format`` value (layouts; ``scaled`` binds a step's scaling).
-FORMATS: dict[str, NumberFormat] = {FLOAT32.name: FLOAT32, FIXED.name: FIXED}
+#: Every number format, by ``controller.number_format`` value (layouts; ``scaled`` binds a step's scaling),
+#: and the analysis-only float64 ideal of ``mpcgen report`` (not a config choice).
+FORMATS: dict[str, NumberFormat] = {FLOAT32.name: FLOAT32, FIXED.name: FIXED, FLOAT64.name: FLOAT64}

@@ -4,12 +4,16 @@ Besides the step (``<prefix>_mpc.c/.h``, ``mpc_binding.h``) it writes the
 portable speed PI (``<prefix>_speed_pi.c/.h``) every target can use.
 
 The report (``<prefix>_report.md``) lists what the C contains (the
-topology's :meth:`~codegen.topology.Topology.report`).  Deterministic: the
-same config gives the same bytes.
+topology's :meth:`~codegen.topology.Topology.report`).  A fixed-point config
+also gets ``<prefix>_quantisation.md``: the quantisation report of the
+generated strategy (``codegen.stages.quantreport``; ``mpcgen report`` gives
+every strategy, plots and JSON).  Deterministic: the same config gives the
+same bytes.
 """
 from __future__ import annotations
 
 from collections.abc import Callable
+from functools import lru_cache
 from pathlib import Path
 
 from codegen.model import Model
@@ -26,4 +30,25 @@ def generate(model: Model, outdir: Path, log: Callable[[str], None] = print) -> 
     files = topo.render(model, tables, model.target)
     files.update(render_speed_pi(model, model.target))
     files[f"{model.prefix}_report.md"] = topo.report(model, tables, model.target)
+    if c.number_format == "fixed":
+        from codegen.stages.quantreport import report_name
+
+        log(f"quantisation report of {model.name} ({c.strategy}): fixed vs float64 ideal and float32 controller")
+        files[report_name(model)] = _quantisation(model.replace(target="host"))
     return write_files(files, outdir)
+
+
+#: states of the generated report (``mpcgen report`` takes more random states and every closed-loop state)
+GENERATE_RANDOM_STATES = 5_000
+GENERATE_CLOSED_LOOP_STATES = 20_000
+
+
+@lru_cache(maxsize=8)
+def _quantisation(model: Model) -> str:
+    """The quantisation report of ``model``'s strategy (the same for every target: computed once)."""
+    from codegen.stages.quantisation import analyse
+    from codegen.stages.quantreport import markdown
+
+    data = analyse(model, [model.controller.strategy], random_states=GENERATE_RANDOM_STATES,
+                   max_closed_loop=GENERATE_CLOSED_LOOP_STATES)
+    return markdown(model, data)

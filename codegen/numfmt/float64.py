@@ -1,0 +1,87 @@
+"""An analysis-only float64 number format: the ideal the fixed-point report measures against.
+
+Not a config choice (``codegen.model.NUMBER_FORMATS`` does not list it) and
+without a C spelling: the topology's Python reference runs in it, one float64
+rounding per operation, to give ``mpcgen report`` its float64 ideal.  Its
+angle guard is the fixed-point format's, so the ideal trips its guard where
+the fixed-point step does.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .fixed import FIXED
+from .float32 import Float32Ops
+
+__all__ = ["Float64Ops", "Float64", "FLOAT64"]
+
+
+class Float64Ops(Float32Ops):
+    """The reference's arithmetic in float64 (analysis only): one float64 rounding per operation."""
+
+    real = np.float64  # type: ignore[assignment]
+
+    def const(self, x: float) -> np.float64:  # type: ignore[override]
+        return np.float64(x)
+
+    def array(self, values: Any) -> np.ndarray:
+        return np.asarray(values, dtype=np.float64)
+
+    def zeros(self, shape: Any) -> np.ndarray:
+        return np.zeros(shape, np.float64)
+
+    def where(self, cond: Any, a: Any, b: Any) -> np.ndarray:
+        return np.where(cond, a, b).astype(np.float64)
+
+    def select(self, conds: list[Any], choices: list[Any], default: Any) -> np.ndarray:
+        return np.select(conds, choices, default).astype(np.float64)
+
+    def from_int(self, n: Any) -> np.ndarray:
+        return np.asarray(n).astype(np.float64)
+
+
+@dataclass(frozen=True)
+class Float64:
+    """An analysis-only float64 backend of :class:`codegen.numfmt.NumberFormat` (no C spelling)."""
+
+    name: str = "float64"
+    real_dtype: np.dtype = np.dtype(np.float64)
+    bits_dtype: np.dtype = np.dtype(np.uint64)
+    c_type: str = "double"
+    macros: str = ""
+    value_kind: str = "MPC_VALUE_F64"
+    value_reader: str = ""
+    ops: Float64Ops = field(default_factory=Float64Ops)
+    scaling: Any = None
+    #: the fixed-point step's angle guard, so the ideal trips where the fixed step does
+    angle_guard_rad: float = FIXED.angle_guard_rad
+
+    def const(self, x: float, unit: str = "") -> np.float64:
+        return np.float64(x)
+
+    def encode(self, unit: str, x: Any) -> np.ndarray:
+        return np.asarray(x, np.float64)
+
+    def decode(self, unit: str, n: Any) -> np.ndarray:
+        return np.asarray(n, np.float64)
+
+    def scaled(self, scaling: Any) -> Float64:
+        return self
+
+    def template_values(self) -> dict[str, object]:
+        return {}
+
+    def for_step(self, signals: list[Any], base: Any, global_q: int | None) -> Float64:
+        return self
+
+    def literal(self, x: float | np.generic) -> str:
+        return repr(float(x))  # type: ignore[arg-type]
+
+    def c_value(self, x: float | np.generic) -> str:
+        return self.literal(x)
+
+
+FLOAT64 = Float64()

@@ -1,0 +1,229 @@
+"""Quantisation analysis of a fixed-point controller (``mpcgen report``; ``generate`` for fixed point).
+
+Per strategy of the config's topology:
+
+a. the Q format, representable range and resolution of every real input and
+   output field (by unit), and every constant: float64 value, stored count,
+   relative rounding error;
+b. the error of the fixed-point step's outputs (``te_est_nm``,
+   ``psi_est_wb``, ``cost_best``) against a float64 ideal: the topology's
+   Python reference run with :data:`FLOAT64` (float64 constants, one float64
+   rounding per operation) on the same physical states (the fixed inputs
+   decoded exactly); the float32 step's error against the same ideal is
+   given alongside;
+c. decision agreement with the float32 controller (``vector``, and ``sw``
+   where the output has it) over the float32 controller's recorded
+   closed-loop states and over random states, both controllers seeing the
+   same physical state (float32 states converted once to the fixed format);
+d. the closed-loop metrics of the fixed controller next to its float32 twin
+   (the topology's ``simulate`` for both).
+
+:data:`FLOAT64` (``codegen.numfmt.float64``) is an analysis-only number format (no C, no
+firmware, not a config choice).
+"""
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from codegen.errors import UsageError
+from codegen.model import Model
+from codegen.numfmt.float64 import FLOAT64
+from codegen.records import REAL, RecordLayout
+from codegen.teststates import in_format
+from codegen.topology import topology_of
+
+__all__ = ["analyse", "fixed_twin", "ERROR_FIELDS",
+           "RIPPLE_KEYS"]
+
+Log = Callable[[str], None]
+
+#: outputs whose fixed-point error against the float64 ideal is reported
+ERROR_FIELDS = ("te_est_nm", "psi_est_wb", "cost_best")
+#: closed-loop metrics set side by side (those the topology's simulate reports)
+RIPPLE_KEYS = ("T_rip_RMSE_nm", "psi_rip_RMSE_wb", "THD_ia_percent", "f_ave_hz", "Cal_ave", "Vo_std_v", "faults")
+
+
+def fixed_twin(model: Model) -> Model:
+    """``model`` itself if it is fixed point, else its fixed-point twin (per-signal formats)."""
+    return model if model.controller.number_format == "fixed" else model.with_controller(number_format="fixed")
+
+
+def _convert(x: np.ndarray, src: RecordLayout, dst: RecordLayout) -> np.ndarray:
+    """Records of ``src`` as records of ``dst``: each real field decoded to SI float64 and encoded once."""
+    out = dst.zeros(len(x))
+    for f in dst.fields:
+        out[f.name] = dst.encode(f.name, src.decode(f.name, x[f.name])) if f.kind == REAL else x[f.name]
+    return out
+
+
+#: bins of the error histograms
+HIST_BINS = 41
+
+
+def _stats(err: np.ndarray, hist: bool = False) -> dict[str, Any]:
+    """max |err|, RMS; ``hist``: a symmetric histogram of ``err`` (edges, counts)."""
+    if err.size == 0:
+        return {"max": float("nan"), "rms": float("nan")}
+    a = np.abs(err)
+    out: dict[str, Any] = {"max": float(a.max()), "rms": float(math.sqrt(float(np.mean(a * a))))}
+    if hist:
+        top = out["max"] or 1.0
+        counts, edges = np.histogram(err, bins=HIST_BINS, range=(-top, top))
+        out["hist"] = {"edges": edges.tolist(), "counts": counts.tolist()}
+    return out
+
+
+def _signal_rows(layout: RecordLayout, observed: np.ndarray, ok: np.ndarray) -> list[dict[str, Any]]:
+    """Q format, range, resolution of every real field, and its largest decoded |x| over ``observed``."""
+    sc = layout.nf.scaling
+    rows = []
+    for f in layout.fields:
+        if f.kind != REAL:
+            continue
+        seen = np.abs(layout.decode(f.name, observed[f.name][ok])) if ok.any() else np.zeros(1)
+        rows.append({"record": layout.record.name, "field": f.name, "unit": f.unit, "q": sc.describe(f.unit),
+                     "largest": sc.largest(f.unit), "resolution": sc.resolution(f.unit),
+                     "observed_max_abs": float(seen.max()) if seen.size else 0.0})
+    return rows
+
+
+def _constant_rows(t_fx: Any, t_64: Any) -> list[dict[str, Any]]:
+    sc = t_fx.scaling
+    ideal = {c.name: float(c.value) for c in t_64.consts}
+    rows = []
+    for c in t_fx.consts:
+        v = ideal.get(c.name, float("nan"))
+        stored = float(sc.decode(c.unit, int(c.value)))
+        rel = abs(stored - v) / abs(v) if v else (0.0 if stored == 0.0 else float("inf"))
+        rows.append({"name": c.name, "unit": c.unit, "q": sc.describe(c.unit), "value": v, "count": int(c.value),
+                     "stored": stored, "rel_error": rel, "doc": c.doc})
+    return rows
+
+
+def _agreement(topo: Any, t32: Any, t_fx: Any, x32: np.ndarray, x_fx: np.ndarray) -> dict[str, Any]:
+    """Decision agreement of the fixed and float32 steps on the same physical states (``x32`` float32
+    records, ``x_fx`` the same states in fixed point), over the states both input guards pass;
+    ``fault_mismatch``: states only one guard trips (a value at a guard limit rounded across it)."""
+    o32, ofx = topo.step_batch(t32, x32), topo.step_batch(t_fx, x_fx)
+    ok = (o32["fault"] == 0) & (ofx["fault"] == 0)
+    n = int(ok.sum())
+    out: dict[str, Any] = {"states": len(x32), "compared": n,
+                           "fault_mismatch": int(((o32["fault"] == 0) != (ofx["fault"] == 0)).sum())}
+    for name in ("vector", "sw"):
+        if name in o32.dtype.names:
+            same = int((o32[name][ok] == ofx[name][ok]).sum())
+            out[name] = {"agree": same, "fraction": same / n if n else float("nan")}
+    return out
+
+
+def _errors(topo: Any, t_fx: Any, t32: Any, t_64: Any, x_fx: np.ndarray) -> dict[str, Any]:
+    """Fixed and float32 outputs against the float64 ideal on the same physical states ``x_fx`` (fixed)."""
+    lay_fx = topo.input_record.bind(t_fx.nf)
+    x64 = _convert(x_fx, lay_fx, topo.input_record.bind(FLOAT64))
+    x32 = _convert(x_fx, lay_fx, topo.input_record.bind(t32.nf))
+    ofx, o32, o64 = topo.step_batch(t_fx, x_fx), topo.step_batch(t32, x32), topo.step_batch(t_64, x64)
+    ok = (ofx["fault"] == 0) & (o32["fault"] == 0) & (o64["fault"] == 0)
+    out_fx, out_32 = topo.output_record.bind(t_fx.nf), topo.output_record.bind(t32.nf)
+    res: dict[str, Any] = {"states": int(ok.sum())}
+    for name in ERROR_FIELDS:
+        ideal = o64[name][ok]
+        res[name] = {"unit": topo.output_record.field(name).unit,
+                     "fixed": _stats(out_fx.decode(name, ofx[name][ok]) - ideal, hist=True),
+                     "float32": _stats(out_32.decode(name, o32[name][ok]) - ideal),
+                     "ideal_max_abs": float(np.abs(ideal).max()) if ideal.size else 0.0}
+    return res
+
+
+def _runs(strategy_result: dict) -> dict[str, dict]:
+    """The runs of one strategy's simulate result: {run: metrics} (a single-run result is "scenario")."""
+    if "T_rip_RMSE_nm" in strategy_result:
+        return {"scenario": strategy_result}
+    return {k: v for k, v in strategy_result.items() if isinstance(v, dict) and "T_rip_RMSE_nm" in v}
+
+
+def _closed_loop(model_fx: Model, model_32: Model, strategies: list[str], log: Log,
+                 traces: Path | None) -> dict[str, Any]:
+    """Closed-loop metrics of the fixed controller and its float32 twin, side by side, with the ratio."""
+    topo = topology_of(model_fx)
+    res = {}
+    for label, m in (("fixed", model_fx), ("float32", model_32)):
+        path = traces / f"{label}.npz" if traces is not None else None
+        res[label] = topo.simulate(m, strategies, None, log=log, traces=path)["strategies"]
+    out: dict[str, Any] = {}
+    for s in strategies:
+        runs_fx, runs_32 = _runs(res["fixed"][s]), _runs(res["float32"][s])
+        out[s] = {}
+        for run, m_fx in runs_fx.items():
+            m_32 = runs_32[run]
+            row = {}
+            for k in RIPPLE_KEYS:
+                if k in m_fx and k in m_32:
+                    a, b = float(m_fx[k]), float(m_32[k])
+                    row[k] = {"fixed": a, "float32": b, "ratio": a / b if b else (1.0 if a == 0 else float("inf"))}
+            out[s][run] = row
+    return out
+
+
+def _subsample(x: np.ndarray, n: int | None) -> np.ndarray:
+    if n is None or len(x) <= n:
+        return x
+    return x[np.linspace(0, len(x) - 1, n).astype(np.intp)]
+
+
+def analyse(model: Model, strategies: list[str] | None = None, random_states: int = 20_000,
+            max_closed_loop: int | None = None, closed_loop: bool = True, log: Log = lambda s: None,
+            traces: Path | None = None) -> dict[str, Any]:
+    """The quantisation analysis (module doc, a-d) of the fixed-point ``model`` for ``strategies``
+    (default: every strategy of its topology).  ``max_closed_loop``: at most this many of the recorded
+    closed-loop states (evenly spaced); ``closed_loop``: run (d); ``traces``: directory the closed-loop
+    runs' time series are written to (``fixed.npz``, ``float32.npz``).  JSON-ready dict."""
+    if model.controller.number_format != "fixed":
+        raise UsageError(f"the quantisation report is about fixed point; {model.source} has "
+                         f"controller.number_format = {model.controller.number_format!r} (use --number-format fixed)")
+    topo = topology_of(model)
+    chosen = list(strategies or topo.strategies)
+    per: dict[str, Any] = {}
+    for s in chosen:
+        m_fx = model.with_controller(strategy=s)
+        m_32 = m_fx.with_controller(number_format="float32", fixed_q=None)
+        log(f"quantisation {model.name} / {s}: deriving fixed, float32 and float64 tables")
+        t_fx, t_32 = topo.derive(m_fx), topo.derive(m_32)
+        lib = topo.host_library(m_32, t_32, with_sim=True)
+        log(f"quantisation {model.name} / {s}: recording the float32 closed-loop states")
+        cl32 = _subsample(topo.closed_loop_states(m_32, lib), max_closed_loop)
+        rnd32 = topo.random_states(m_32, t_32, random_states, 1)
+        cl_fx = in_format(cl32, topo.input_record.bind(t_fx.nf))
+        log(f"quantisation {model.name} / {s}: recording the fixed-point closed-loop states")
+        own_fx = _subsample(topo.closed_loop_states(m_fx, topo.host_library(m_fx, t_fx, with_sim=True)),
+                            max_closed_loop)
+        own32 = _convert(own_fx, topo.input_record.bind(t_fx.nf), topo.input_record.bind(t_32.nf))
+        rnd_fx = in_format(rnd32, topo.input_record.bind(t_fx.nf))
+        t_64 = topo.derive(m_fx.with_controller(number_format="float64", fixed_q=None))
+        errors = {"closed_loop": _errors(topo, t_fx, t_32, t_64, cl_fx),
+                  "random": _errors(topo, t_fx, t_32, t_64, rnd_fx)}
+        o_fx = topo.step_batch(t_fx, cl_fx)
+        ok_in = o_fx["fault"] == 0
+        sc = t_fx.scaling
+        per[s] = {
+            "scaling": {"frac_bits": sc.frac_bits, "exps_v_a_s": list(sc.exps), "mode": sc.mode},
+            "signals": (_signal_rows(topo.input_record.bind(t_fx.nf), cl_fx, ok_in)
+                        + _signal_rows(topo.output_record.bind(t_fx.nf), o_fx, ok_in)),
+            "constants": _constant_rows(t_fx, t_64),
+            "errors": errors,
+            "agreement": {"closed_loop": _agreement(topo, t_32, t_fx, cl32, cl_fx),
+                          "closed_loop_fixed": _agreement(topo, t_32, t_fx, own32, own_fx),
+                          "random": _agreement(topo, t_32, t_fx, rnd32, rnd_fx)},
+        }
+    out: dict[str, Any] = {"config": model.name, "config_hash": model.config_hash(), "topology": topo.name,
+                           "strategies": per}
+    if closed_loop:
+        cl = _closed_loop(model, model.with_controller(number_format="float32", fixed_q=None), chosen, log, traces)
+        for s in chosen:
+            per[s]["closed_loop"] = cl[s]
+    return out
+

@@ -1,0 +1,168 @@
+"""The quantisation report: markdown, PNG plots and JSON of :func:`codegen.stages.quantisation.analyse`.
+
+``mpcgen report CFG`` prints the markdown (``-o DIR``: writes
+``<prefix>_quantisation.md`` and the plots there; ``--json F``: the data);
+``mpcgen generate`` writes the markdown of the generated strategy for a
+fixed-point config.  The markdown holds no dates, paths or wall times: the
+same config gives the same bytes.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from codegen import __version__
+from codegen.model import Model
+from codegen.stages.quantisation import ERROR_FIELDS, RIPPLE_KEYS
+
+__all__ = ["markdown", "plots", "report_name"]
+
+_SETS = {
+    "closed_loop": "float32 closed-loop states (converted to fixed)",
+    "closed_loop_fixed": "fixed closed-loop states (converted to float32)",
+    "random": "random states (float32, converted to fixed)",
+}
+
+
+def report_name(model: Model) -> str:
+    """File name of the markdown report."""
+    return f"{model.prefix}_quantisation.md"
+
+
+def _g(x: float, spec: str = ".4g") -> str:
+    return "n/a" if x != x else format(x, spec)
+
+
+def _pct(x: float) -> str:
+    return "n/a" if x != x else f"{100 * x:.3f} %"
+
+
+def _formats(d: dict) -> list[str]:
+    sc = d["scaling"]
+    ev, ea, es = sc["exps_v_a_s"]
+    lines = ["", f"Scaling: {sc['mode']}, G = {sc['frac_bits']} fractional bits of the per-unit values, "
+                 f"bases 2^{ev} V, 2^{ea} A, 2^{es} s (a value of unit u is stored in Q(G - e(u))).", "",
+             "| record | field | unit | Q format | range (+-) | resolution | largest \\|x\\| seen | headroom |",
+             "|---|---|---|---|---|---|---|---|"]
+    for r in d["signals"]:
+        seen = r["observed_max_abs"]
+        head = f"{r['largest'] / seen:.3g}x" if seen else "-"
+        lines.append(f"| {r['record']} | {r['field']} | {r['unit'] or '1'} | {r['q']} | {_g(r['largest'])} | "
+                     f"{_g(r['resolution'])} | {_g(seen)} | {head} |")
+    lines += ["", "Largest |x| seen: over the fixed step's inputs and outputs on the float32 closed-loop states.",
+              "", "| constant | unit | Q format | value (float64) | stored count | stored value | relative error |",
+              "|---|---|---|---|---|---|---|"]
+    for c in d["constants"]:
+        lines.append(f"| {c['name']} | {c['unit'] or '1'} | {c['q']} | {c['value']!r} | {c['count']} | "
+                     f"{c['stored']!r} | {_g(c['rel_error'], '.3e')} |")
+    return lines
+
+
+def _errors(d: dict) -> list[str]:
+    lines = ["", "| states | output | unit | fixed max | fixed RMS | float32 max | float32 RMS | ideal max \\|x\\| |",
+             "|---|---|---|---|---|---|---|---|"]
+    for key, e in d["errors"].items():
+        for name in ERROR_FIELDS:
+            v = e[name]
+            lines.append(f"| {key} ({e['states']}) | {name} | {v['unit'] or '1'} | {_g(v['fixed']['max'], '.3e')} | "
+                         f"{_g(v['fixed']['rms'], '.3e')} | {_g(v['float32']['max'], '.3e')} | "
+                         f"{_g(v['float32']['rms'], '.3e')} | {_g(v['ideal_max_abs'])} |")
+    return lines
+
+
+def _agreement(d: dict) -> list[str]:
+    lines = ["", "| states | count | both guards pass | one guard trips | vector agrees | sw agrees |",
+             "|---|---|---|---|---|---|"]
+    for key, a in d["agreement"].items():
+        sw = _pct(a["sw"]["fraction"]) if "sw" in a else "-"
+        lines.append(f"| {_SETS.get(key, key)} | {a['states']} | {a['compared']} | {a['fault_mismatch']} | "
+                     f"{_pct(a['vector']['fraction'])} | {sw} |")
+    return lines
+
+
+def _closed_loop(d: dict) -> list[str]:
+    lines = ["", "| run | metric | fixed | float32 | fixed / float32 |", "|---|---|---|---|---|"]
+    for run, row in d["closed_loop"].items():
+        for k in RIPPLE_KEYS:
+            if k in row:
+                v = row[k]
+                lines.append(f"| {run} | {k} | {_g(v['fixed'])} | {_g(v['float32'])} | {_g(v['ratio'], '.4f')} |")
+    return lines
+
+
+def markdown(model: Model, data: dict, plot_files: dict[str, list[str]] | None = None) -> str:
+    """The report of ``data`` (``analyse`` of ``model``); ``plot_files``: per strategy, the PNG file names."""
+    lines = [f"# {model.prefix}: quantisation report (fixed point)", "",
+             f"- config: `{model.name}` (hash {data['config_hash']}), topology {data['topology']}, mpcgen {__version__}",
+             "- ideal: the topology's Python reference in float64 (float64 constants, one float64 rounding per "
+             "operation) on the fixed inputs decoded exactly; the float32 step on the same states is the second column",
+             "- agreement: fixed vs float32 decisions on the same physical states, over the states both input guards "
+             "pass; 'one guard trips': a value at a guard limit rounded across it by the conversion, or an angle "
+             "beyond the fixed-point angle guard",
+             "- closed loop: the topology's scenario run(s) with the fixed controller and with its float32 twin"]
+    seen: dict[str, str] = {}
+    for s, d in data["strategies"].items():
+        lines += ["", f"## Strategy {s}", "", "### Q formats, ranges and constants"]
+        key = repr((d["scaling"], [(r["field"], r["q"]) for r in d["signals"]], d["constants"]))
+        if key in seen:
+            lines += ["", f"Same formats and constants as {seen[key]}."]
+        else:
+            seen[key] = s
+            lines += _formats(d)
+        lines += ["", "### Prediction error against the float64 ideal", *_errors(d)]
+        lines += ["", "### Decision agreement with the float32 controller", *_agreement(d)]
+        if "closed_loop" in d:
+            lines += ["", "### Closed loop: fixed vs float32", *_closed_loop(d)]
+        for f in (plot_files or {}).get(s, []):
+            lines += ["", f"![{f}]({f})"]
+    return "\n".join(lines) + "\n"
+
+
+def plots(model: Model, data: dict, traces: Path | None, outdir: Path) -> dict[str, list[str]]:
+    """Per strategy: the torque of every closed-loop run, fixed vs float32 (from ``traces``:
+    ``fixed.npz``, ``float32.npz``), and the histograms of the fixed outputs' errors; file names."""
+    from codegen.plotting import new_figure, save_figure
+
+    out: dict[str, list[str]] = {}
+    runs: dict[str, Any] = {}
+    if traces is not None and (traces / "fixed.npz").exists():
+        runs = {label: np.load(traces / f"{label}.npz") for label in ("fixed", "float32")}
+    for s, d in data["strategies"].items():
+        files = []
+        for run in d.get("closed_loop", {}) if runs else {}:
+            key = f"{s}/{run}"
+            if f"{key}/te_nm" not in runs["fixed"].files:
+                continue
+            fig, (ax,) = new_figure()
+            for label, style in (("float32", {"color": "tab:orange", "lw": 0.5}),
+                                 ("fixed", {"color": "tab:blue", "lw": 0.5, "alpha": 0.8})):
+                z = runs[label]
+                ax.plot(z[f"{key}/t_s"], z[f"{key}/te_nm"], label=f"Te, {label} controller", **style)
+            z = runs["fixed"]
+            ax.plot(z[f"{key}/t_s"], z[f"{key}/torque_ref_nm"], color="k", lw=0.8, label="T* (fixed)")
+            ax.set(xlabel="time t / s", ylabel="torque / (N*m)", title=f"{model.name} {s} {run}: torque, fixed vs float32")
+            ax.grid(True, alpha=0.3)
+            ax.legend(loc="best")
+            name = f"{model.prefix}_quant_{s}_{run}_torque.png"
+            save_figure(fig, outdir / name)
+            files.append(name)
+        fig, axes = new_figure(len(ERROR_FIELDS), height=2.6 * len(ERROR_FIELDS))
+        for ax, field in zip(axes, ERROR_FIELDS):
+            for key, e in d["errors"].items():
+                h = e[field]["fixed"].get("hist")
+                if h:
+                    edges = np.asarray(h["edges"])
+                    ax.stairs(h["counts"], edges, label=key)
+            ax.set(xlabel=f"fixed - float64 ideal, {field} / {e[field]['unit'] or '1'}", ylabel="states",
+                   title=f"{model.name} {s}: error of {field}")
+            ax.grid(True, alpha=0.3)
+            ax.legend(loc="best")
+        name = f"{model.prefix}_quant_{s}_errors.png"
+        save_figure(fig, outdir / name)
+        files.append(name)
+        out[s] = files
+    for z in runs.values():
+        z.close()
+    return out

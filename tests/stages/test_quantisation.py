@@ -1,0 +1,104 @@
+"""The quantisation report: fixed point against the float64 ideal and the float32 controller.
+
+For the seed configs in fixed point, every strategy: the fixed and float32
+controllers pick the same vector (and switching state) on >= 99 % of the
+recorded closed-loop states, and the fixed controller's closed-loop torque
+ripple is within 10 % of the float32 controller's.
+"""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from codegen.cli import main
+from codegen.config import load_config
+from codegen.model import NUMBER_FORMATS
+from codegen.numfmt import FORMATS
+from codegen.numfmt.float64 import FLOAT64
+from codegen.stages.quantisation import analyse
+
+from conftest import IPMSM, SPMSM, TTYPE
+
+
+@pytest.fixture(scope="module")
+def results():
+    cache: dict[str, dict] = {}
+
+    def get(path):
+        if path not in cache:
+            cache[path] = analyse(load_config(path, {"controller.number_format": "fixed"}), random_states=5_000)
+        return cache[path]
+
+    return get
+
+
+@pytest.mark.parametrize("path", [SPMSM, IPMSM, TTYPE], ids=["spmsm", "ipmsm", "tlevel"])
+def test_fixed_decisions_agree_with_float32_and_ripple_matches(results, path):
+    data = results(str(path))
+    for s, d in data["strategies"].items():
+        for key in ("closed_loop", "closed_loop_fixed"):
+            a = d["agreement"][key]
+            assert a["compared"] > 0.8 * a["states"], (s, key, a)
+            for name in ("vector", "sw"):
+                if name in a:
+                    assert a[name]["fraction"] >= 0.99, (s, key, name, a)
+        # the fixed controller's own states, converted to float32, pass both guards
+        assert d["agreement"]["closed_loop_fixed"]["fault_mismatch"] == 0, s
+        for run, row in d["closed_loop"].items():
+            r = row["T_rip_RMSE_nm"]
+            assert 0.9 <= r["ratio"] <= 1.1, (s, run, r)
+            assert row["faults"]["fixed"] == 0, (s, run)
+
+
+@pytest.mark.parametrize("path", [SPMSM, TTYPE], ids=["spmsm", "tlevel"])
+def test_fixed_error_is_bounded_and_float32_is_closer_to_the_ideal(results, path):
+    data = results(str(path))
+    for s, d in data["strategies"].items():
+        for key, e in d["errors"].items():
+            assert e["states"] > 0
+            for name in ("te_est_nm", "psi_est_wb"):
+                fx, f32 = e[name]["fixed"], e[name]["float32"]
+                # a few thousand counts of resolution at most, and float32 more precise than fixed here
+                assert fx["max"] < 1e-3 * max(e[name]["ideal_max_abs"], 1.0), (s, key, name, fx)
+                assert f32["rms"] <= fx["rms"], (s, key, name)
+        for c in d["constants"]:
+            if c["name"] in ("I_TRIP_A", "UDC_MAX_V", "PSI_F_WB", "EPS_T_NM"):
+                assert c["rel_error"] < 1e-4, c
+        assert {r["field"] for r in d["signals"]} >= {"ia_a", "te_est_nm", "psi_est_wb"}
+
+
+def test_float64_is_an_analysis_format_not_a_config_choice():
+    assert FORMATS[FLOAT64.name] is FLOAT64 and FLOAT64.name not in NUMBER_FORMATS
+    ops = FLOAT64.ops
+    assert ops.mul(ops.const(0.1), ops.const(3.0)) == np.float64(0.1) * 3.0
+
+
+def test_report_cli_writes_markdown_plots_and_json(tmp_path):
+    out = tmp_path / "rep"
+    assert main(["report", str(SPMSM), "--number-format", "fixed", "--strategies", "s3", "--states", "2000",
+                 "-o", str(out), "--json", str(tmp_path / "q.json"), "-q"]) == 0
+    md = (out / "spmsm_quantisation.md").read_text()
+    for text in ("## Strategy s3", "Q format", "TE_GEO_K", "float64 ideal", "vector agrees", "T_rip_RMSE_nm"):
+        assert text in md, text
+    assert sorted(p.name for p in out.glob("*.png")) == ["spmsm_quant_s3_errors.png",
+                                                         "spmsm_quant_s3_scenario_torque.png"]
+    data = json.loads((tmp_path / "q.json").read_text())
+    assert list(data["strategies"]) == ["s3"]
+
+
+def test_report_of_a_float32_config_analyses_its_fixed_twin(capsys):
+    assert main(["report", str(SPMSM), "--strategies", "s1", "--states", "500", "-q"]) == 0
+    assert "quantisation report (fixed point)" in capsys.readouterr().out
+
+
+def test_generate_writes_the_report_for_fixed_point_only(tmp_path):
+    args = ["generate", str(IPMSM), "--strategy", "s1", "--target", "host", "-q"]
+    assert main([*args, "-o", str(tmp_path / "f")]) == 0
+    assert not list((tmp_path / "f").glob("*_quantisation.md"))
+    assert main([*args, "--number-format", "fixed", "-o", str(tmp_path / "q")]) == 0
+    md = (tmp_path / "q" / "ipmsm_quantisation.md").read_text()
+    assert "## Strategy s1" in md and "## Strategy s2" not in md
+    assert main([*args, "--number-format", "fixed", "-o", str(tmp_path / "q2")]) == 0
+    assert (tmp_path / "q2" / "ipmsm_quantisation.md").read_text() == md
