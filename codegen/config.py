@@ -41,6 +41,7 @@ from codegen.model import (
     Inverter,
     Model,
     Motor,
+    Plant,
     Scenario,
     SpeedLoop,
     SpeedMode,
@@ -254,6 +255,25 @@ SCHEMA: dict[str, Spec] = {
         STEPS, _cc(Ref(_RATED_RPM, -10.0, "-10*rated"), Ref(_RATED_RPM, 10.0, "10*rated"))
     ),
     "scenario.load_nm": Spec(STEPS),
+    "plant.actuation_delay_periods": Spec(INT, _cc(0, 2)),
+    "plant.rs_ohm": _real(_oc(0, 100)),
+    "plant.ld_h": _real(_oc(0, 1)),
+    "plant.lq_h": _real(_oc(0, 1)),
+    "plant.psi_f_wb": _real(_oc(0, 10)),
+    "plant.j_kgm2": _real(_oc(0, 1e3)),
+    "plant.b_nms": _real(_cc(0, 1e3)),
+    "plant.udc_v": _real(_oc(0, 1e4)),
+    "plant.c_f": _real(_oc(0, 1), hint_low="capacitance <= 0"),
+    "plant.dead_time_s": _real(_cc(0, Ref("controller.dt_s", 0.1, "dt_s/10"))),
+    "plant.device_drop_v": _real(_cc(0, 50)),
+    "plant.current_gain_error": _real(_cc(-0.5, 0.5)),
+    "plant.current_offset_a": _real(_cc(Ref("inverter.i_trip_a", -1.0, "-i_trip_a"), Ref("inverter.i_trip_a"))),
+    "plant.adc_bits": Spec(INT, _cc(0, 24)),
+    "plant.adc_full_scale_a": _real(_oc(0, 1e5)),
+    "plant.noise_a": _real(_cc(0, Ref("inverter.i_trip_a"))),
+    "plant.noise_seed": Spec(INT, _cc(0, 2**31 - 1)),
+    "plant.encoder_bits": Spec(INT, _cc(0, 24)),
+    "plant.measurement_delay_s": _real(_cc(0, Ref("controller.dt_s"))),
     "target.name": _choice(TARGETS),
     "target.placement": _choice(PLACEMENTS),
 }
@@ -268,6 +288,7 @@ _SECTION_CLASS: dict[str, type] = {
     "controller.derivation": Derivation,
     "speed_loop": SpeedLoop,
     "scenario": Scenario,
+    "plant": Plant,
     "target": Model,
 }
 _ATTR_NAME: dict[str, str] = {"target.name": "target"}
@@ -649,6 +670,7 @@ def _build(values: Mapping[str, object], source: str) -> Model:
         controller=Controller(**kw("controller"), derivation=Derivation(**kw("controller.derivation"))),
         speed_loop=SpeedLoop(**kw("speed_loop")),
         scenario=Scenario(**kw("scenario")),
+        plant=Plant(**kw("plant")),
     )
 
 

@@ -124,6 +124,47 @@ class Scenario:
 
 
 @dataclass(frozen=True)
+class Plant:
+    """The simulated plant where it differs from the controller's model, and its non-idealities.
+
+    Every field defaults to "as the controller's model" / "off": a config
+    without ``[plant]`` simulates the ideal plant it always did.  None of it
+    reaches the generated C.
+    """
+
+    #: decision from the samples of period k applied during [k+d, k+d+1) (None: 1 with
+    #: controller.delay_compensation, else 0, the timing each controller assumes)
+    actuation_delay_periods: int | None = None
+    # parameter overrides (None: the controller's value), for mismatch studies
+    rs_ohm: float | None = None
+    ld_h: float | None = None
+    lq_h: float | None = None
+    psi_f_wb: float | None = None
+    j_kgm2: float | None = None
+    b_nms: float | None = None
+    udc_v: float | None = None
+    c_f: float | None = None
+    # non-ideal inverter
+    dead_time_s: float = 0.0
+    device_drop_v: float = 0.0
+    # non-ideal sensors
+    current_gain_error: float = 0.0
+    current_offset_a: float = 0.0
+    adc_bits: int = 0
+    adc_full_scale_a: float | None = None
+    noise_a: float = 0.0
+    noise_seed: int = 1
+    encoder_bits: int = 0
+    measurement_delay_s: float = 0.0
+
+    def delay_periods(self, delay_compensation: bool) -> int:
+        """The actuation delay d in periods (the default follows the controller's assumption)."""
+        if self.actuation_delay_periods is not None:
+            return self.actuation_delay_periods
+        return 1 if delay_compensation else 0
+
+
+@dataclass(frozen=True)
 class Model:
     """The whole validated configuration."""
 
@@ -138,6 +179,9 @@ class Model:
     target: Target = "host"
     #: memory placement of the step and its tables (stm32h743: "tcm" = ITCM/DTCM sections)
     placement: Placement = "tcm"
+    #: the simulated plant's differences from the controller's model (not part of the config hash:
+    #: it never reaches the generated C)
+    plant: Plant = field(default_factory=Plant)
     #: one-line warnings of the operating-point checks (not part of the config hash)
     warnings: tuple[str, ...] = field(default=(), compare=False)
 
@@ -159,6 +203,9 @@ class Model:
         return d
 
     def config_hash(self) -> str:
-        """SHA-256 (hex, 16 chars) of the canonical JSON of the model."""
-        blob = json.dumps(self.as_dict(), sort_keys=True, separators=(",", ":"))
+        """SHA-256 (hex, 16 chars) of the canonical JSON of the model without its ``[plant]`` section
+        (the plant shapes simulations, never the generated code: a plant override keeps the C's bytes)."""
+        d = self.as_dict()
+        d.pop("plant", None)
+        blob = json.dumps(d, sort_keys=True, separators=(",", ":"))
         return hashlib.sha256(blob.encode()).hexdigest()[:16]

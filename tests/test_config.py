@@ -152,7 +152,8 @@ def test_schema_covers_every_model_field() -> None:
     leaves = {"meta.name", "meta.prefix", "target.name", "target.placement"}
     sections = {"motor": model_module.Motor, "inverter": model_module.Inverter,
                 "controller": model_module.Controller, "speed_loop": model_module.SpeedLoop,
-                "scenario": model_module.Scenario, "controller.derivation": model_module.Derivation}
+                "scenario": model_module.Scenario, "controller.derivation": model_module.Derivation,
+                "plant": model_module.Plant}
     for section, cls in sections.items():
         leaves |= {f"{section}.{f.name}" for f in dataclasses.fields(cls) if f.name != "derivation"}
     assert set(SCHEMA) == leaves
