@@ -206,18 +206,20 @@ def rows_to_records(rows: Sequence[Mapping[str, object]], dtype: np.dtype) -> np
 
 
 def seeded_mix(fixed: np.ndarray, n: int,
-               parts: Sequence[tuple[int, Callable[[int], np.ndarray]]]) -> np.ndarray:
-    """``n`` states: ``fixed`` first, then the rest shared among ``parts``.
+               parts: Sequence[tuple[int, Callable[[int], np.ndarray]]], layout: RecordLayout) -> np.ndarray:
+    """``n`` states of ``layout`` (the input record in the step's format): ``fixed`` first, then the
+    rest shared among ``parts``.
 
-    ``parts`` are (percent, generator) pairs; generator(k) returns at least k states; the
-    last part takes whatever the percentages leave."""
+    ``parts`` are (percent, generator) pairs; generator(k) returns at least k states (float32 SI
+    or already in the format: each part goes through :func:`in_format`); the last part takes
+    whatever the percentages leave."""
     if n < 1:
         raise ValueError("n must be >= 1")
     rest = max(0, n - len(fixed))
-    out = [fixed]
+    out = [in_format(fixed, layout)]
     used = 0
     for i, (percent, make) in enumerate(parts):
         k = rest - used if i == len(parts) - 1 else rest * percent // 100
-        out.append(make(k)[:k])
+        out.append(in_format(make(k)[:k], layout))
         used += k
     return np.concatenate(out)[:n]

@@ -11,10 +11,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+
 from codegen import __version__
 from codegen.errors import Unsupported
 from codegen.model import Model
-from codegen.records import F32, I32, REAL, U16, Field, RecordLayout
+from codegen.records import Field, RecordLayout
 from codegen.render import environment
 from codegen.resources import firmware_dir
 from codegen.stages.firmware import ProtocolBuild
@@ -38,15 +40,16 @@ class Op:
     wire: str  # "u16" | "f32" | "i32"
 
 
+#: numpy storage type of a field -> its wire codec (a real field: its number format's storage type)
+WIRE = {np.dtype(np.uint16): "u16", np.dtype(np.int32): "i32", np.dtype(np.float32): "f32"}
+
+
 def _wire(lay: RecordLayout, f: Field) -> str:
-    if f.kind == U16:
-        return "u16"
-    if f.kind == I32:
-        return "i32"
-    if f.kind == F32 or (f.kind == REAL and lay.nf.name == "float32"):
-        return "f32"
-    raise Unsupported(f"the serial protocol has no codec for {lay.record.name}.{f.name} "
-                      f"(kind {f.kind}, number format {lay.nf.name})")
+    try:
+        return WIRE[np.dtype(lay.np_type(f)).newbyteorder("=")]
+    except KeyError:
+        raise Unsupported(f"the serial protocol has no codec for {lay.record.name}.{f.name} "
+                          f"(kind {f.kind}, number format {lay.nf.name})") from None
 
 
 def _ops(lay: RecordLayout) -> list[Op]:

@@ -229,8 +229,10 @@ class Schema:
 
     @cached_property
     def schema_hash(self) -> str:
-        """SHA-256 (hex, 16 chars) of the protocol version, the limits, the codes and every layout hash."""
-        parts = [f"v{PROTOCOL_VERSION}", f"frame{MAX_FRAME}", f"batch{MAX_BATCH}", f"steps{MAX_STEPS}",
+        """SHA-256 (hex, 16 chars) of the protocol version, the number format, the limits, the codes and
+        every layout hash (a real field's C type is its format's: a float32 board and a fixed-point
+        host never match)."""
+        parts = [f"v{PROTOCOL_VERSION}", f"format={self.number_format}", f"frame{MAX_FRAME}", f"batch{MAX_BATCH}", f"steps{MAX_STEPS}",
                  f"telemetry{TELEMETRY_SAMPLES}",
                  ",".join(f"{m.name}={m.value}" for m in Msg), ",".join(f"{e.name}={e.value}" for e in Err)]
         parts += [f"{lay.record.name}:{lay.layout_hash}" for lay in self.layouts]

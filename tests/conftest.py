@@ -44,12 +44,15 @@ CASE_IDS = [f"{c}-{s}" for c, s in CASES]
 
 
 @functools.cache
-def example(config: str, strategy: str) -> tuple[Model, Any]:
+def example(config: str, strategy: str, number_format: str | None = None) -> tuple[Model, Any]:
     """An example ("spmsm" or "tlevel") with ``strategy`` and its derived tables (two-level: the
-    published switch tables, so that no training run is needed)."""
+    published switch tables, so that no training run is needed); ``number_format``: override
+    ``controller.number_format``."""
     from codegen.topology import topology_of
 
     overrides: dict[str, object] = {"controller.strategy": strategy}
+    if number_format is not None:
+        overrides["controller.number_format"] = number_format
     if config == "spmsm":
         overrides["controller.tables"] = "published"
     m = load_config(SPMSM if config == "spmsm" else TTYPE, overrides)

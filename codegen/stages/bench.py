@@ -9,7 +9,10 @@ shared machine are noise; the ratios are the figure to compare with the
 seed's Table 11.  Also: closed-loop simulation throughput in periods/s.
 
 Emulated (``--emulated``): instructions per step on the emulated Cortex-M7
-(codegen.emulate), reported as instructions -- not cycles.
+(codegen.emulate), reported as instructions -- not cycles -- for the config's
+number format (``m7_instructions_per_step``) and, side by side, every number
+format (``m7_instructions_per_step_float32``, ``m7_instructions_per_step_fixed``:
+the same config and strategy with ``controller.number_format`` replaced).
 """
 from __future__ import annotations
 
@@ -20,7 +23,9 @@ from pathlib import Path
 import numpy as np
 
 from codegen import __version__
+from codegen.errors import MpcgenError
 from codegen.model import Model
+from codegen.numfmt import FORMATS
 from codegen.topology import topology_of
 
 
@@ -37,28 +42,53 @@ def host_ns_per_step(libs: dict, states: np.ndarray, repeats: int) -> dict[str, 
 
 
 def emulated_instructions(model: Model, strategies: list[str], log: Callable[[str], None]) -> dict[str, dict]:
-    """Instructions per step on the emulated Cortex-M7 (QEMU -icount) for each strategy.
+    """Instructions per step on the emulated Cortex-M7 (QEMU -icount) for each strategy, in every
+    number format (``codegen.numfmt.FORMATS``): strategy -> format name -> figures, or None
+    where the config does not fit another format (its error message under ``"error"``).
 
-    Each strategy's qemu-m7 image replays the same 2 000 states of the
-    baseline's recorded trajectory (two-level: the conventional closed-loop
-    run; three-level: the 27-MPDTC run at rated speed) and also runs the
-    bit-exact self-test;
-    a mismatch or a digest disagreement is an error, never a number.
+    Each image replays the same 2 000 states of the baseline's recorded
+    trajectory (two-level: the conventional closed-loop run; three-level: the
+    27-MPDTC run at rated speed) and also runs the bit-exact self-test; a
+    mismatch or a digest disagreement is an error, never a number.
     """
     import tempfile
 
     from codegen.stages.emulate import EmulationError, run_and_check
 
-    out = {}
+    own = model.controller.number_format
+    out: dict[str, dict] = {s: {} for s in strategies}
     with tempfile.TemporaryDirectory(prefix="mpcgen-m7-") as tmp:
-        for s in strategies:
-            variant = model.with_controller(strategy=s)
-            log(f"emulated Cortex-M7: building and running {s} in QEMU")
-            r = run_and_check(variant, topology_of(variant).derive(variant), Path(tmp) / s, n_selftest=1000)
-            if r.mismatches or not r.digests_match:
-                raise EmulationError(f"{s}: emulated results differ from the reference ({r.mismatches} mismatches)")
-            out[s] = {"min": r.instr_min, "median": r.instr_median, "max": r.instr_max, "mean": r.instr_mean}
+        for fmt in (own, *(f for f in FORMATS if f != own)):
+            for s in strategies:
+                variant = model.with_controller(strategy=s, number_format=fmt)
+                log(f"emulated Cortex-M7: building and running {s} ({fmt}) in QEMU")
+                try:
+                    tables = topology_of(variant).derive(variant)
+                except MpcgenError as e:
+                    if fmt == own:
+                        raise
+                    log(f"  {s} in {fmt}: not measured ({e})")
+                    out[s][fmt] = {"error": str(e)}
+                    continue
+                r = run_and_check(variant, tables, Path(tmp) / f"{s}-{fmt}", n_selftest=1000)
+                if r.mismatches or not r.digests_match:
+                    raise EmulationError(f"{s} ({fmt}): emulated results differ from the reference "
+                                         f"({r.mismatches} mismatches)")
+                out[s][fmt] = {"min": r.instr_min, "median": r.instr_median, "max": r.instr_max,
+                               "mean": r.instr_mean, "selftest_states": r.states, "mismatches": r.mismatches}
     return out
+
+
+def _format_columns(per_format: dict[str, dict]) -> tuple[dict[str, object], str]:
+    """JSON entries ``m7_instructions_per_step_<format>`` (median, None if not measured) and the
+    table's cells, one per number format."""
+    entry: dict[str, object] = {}
+    cells = []
+    for fmt, st in per_format.items():
+        median = st.get("median")
+        entry[f"m7_instructions_per_step_{fmt}"] = median
+        cells.append(f"{median:9.0f}" if median is not None else f"{'n/a':>9s}")
+    return entry, " ".join(cells)
 
 
 def bench(model: Model, strategies: list[str], emulated: bool = False, repeats: int = 5,
@@ -81,28 +111,38 @@ def bench(model: Model, strategies: list[str], emulated: bool = False, repeats: 
         "baseline": base,
         "strategies": {},
     }
-    rows = [f"{'strategy':12s} {'host ns/step':>13s} {'ratio':>7s}" + ("  M7 instr/step (min/median/max)   ratio" if emulated else "")]
+    own = model.controller.number_format
     m7 = {}
+    header = f"{'strategy':12s} {'host ns/step':>13s} {'ratio':>7s}"
     if emulated:
         m7 = emulated_instructions(model, strategies, log=log)
+        header += (f"  M7 instr/step {own} (min/median/max)   ratio  "
+                   + " ".join(f"{f:>9s}" for f in m7[base]))
+    rows = [header]
     for s in strategies:
         host_ratio = ns[s] / ns[base]
         # with --emulated, ratio_to_conventional is the M7 instruction ratio (the issue's figure)
-        entry = {"host_ns_per_step": ns[s], "host_ns_ratio": host_ratio, "ratio_to_conventional": host_ratio}
+        entry: dict[str, object] = {"host_ns_per_step": ns[s], "host_ns_ratio": host_ratio,
+                                    "ratio_to_conventional": host_ratio}
         line = f"{s:12s} {ns[s]:13.1f} {host_ratio:7.3f}"
         if emulated:
-            st = m7[s]
-            m7_ratio = st["median"] / m7[base]["median"]
+            st = m7[s][own]
+            m7_ratio = st["median"] / m7[base][own]["median"]
+            columns, cells = _format_columns(m7[s])
             entry.update({
                 "m7_instructions_per_step": st["median"], "m7_instructions_min": st["min"],
                 "m7_instructions_max": st["max"], "m7_ratio_to_conventional": m7_ratio,
-                "ratio_to_conventional": m7_ratio,
+                "ratio_to_conventional": m7_ratio, **columns, "m7_by_number_format": m7[s],
             })
-            line += f"  {st['min']:6.0f} / {st['median']:6.0f} / {st['max']:6.0f}   {m7_ratio:6.3f}"
+            line += (f"  {' ' * (len(own) + 1)}{st['min']:6.0f} / {st['median']:6.0f} / {st['max']:6.0f}"
+                     f"   {m7_ratio:6.3f}  {cells}")
         result["strategies"][s] = entry
         rows.append(line)
     rows.append(f"closed-loop simulation ({model.name}, {base}): {result['sim_periods_per_s']:,.0f} periods/s")
     if emulated:
-        rows.append("M7 figures are instruction counts on the emulated Cortex-M7 (QEMU -icount), not cycles.")
+        rows.append("M7 figures are instruction counts on the emulated Cortex-M7 (QEMU -icount), not cycles; "
+                    f"the min/median/max and ratio columns are the config's number format ({own}), the last "
+                    "columns the median in every number format (JSON m7_instructions_per_step_<format>), "
+                    "each image's self-test bit-exact.")
     result["_table"] = "\n".join(rows)
     return result

@@ -35,7 +35,14 @@ from codegen.model import Model
 from codegen.records import REAL, RecordLayout
 from codegen.render import environment
 from codegen.resources import firmware_dir
-from codegen.stages.fwdata import SELFTEST_SEED, expected_outputs, layouts, trajectory_states
+from codegen.stages.fwdata import (
+    SELFTEST_SEED,
+    expected_outputs,
+    in_step_format,
+    layouts,
+    selftest_states,
+    trajectory_states,
+)
 from codegen.topology import topology_of
 
 RUNTIME_FILES = ("main.c", "console.c", "console.h", "mpc_runtime.c", "mpc_runtime.h",
@@ -182,11 +189,11 @@ def make_test_sets(model: Model, t: Any, n_selftest: int, n_bench: int,
     """The self-test set and (if n_bench > 0) the bench trajectory, with reference outputs."""
     topo = topology_of(model)
     inp, out = layouts(model)
-    x = topo.selftest_states(model, t, n_selftest, seed)
+    x = selftest_states(model, t, n_selftest, seed)
     sets = [TestSet("selftest", f"{len(x)} guard and random states (seed {seed})", x,
                     expected_outputs(topo, t, x), False, inp, out)]
     if n_bench > 0:
-        b = trajectory_states(model, n_bench)
+        b = in_step_format(model, t, trajectory_states(model, n_bench))
         sets.append(TestSet("bench", f"{len(b)} {topo.trajectory_doc}", b, expected_outputs(topo, t, b),
                             True, inp, out))
     return sets

@@ -18,9 +18,10 @@ from codegen.hostbuild import cache_root
 from codegen.model import Model
 from codegen.numfmt import number_format
 from codegen.records import REAL, RecordLayout
+from codegen.teststates import in_format
 from codegen.topology import Topology, topology_of
 
-__all__ = ["SELFTEST_SEED", "layouts", "selftest_states", "trajectory_states", "expected_outputs",
+__all__ = ["SELFTEST_SEED", "layouts", "in_step_format", "selftest_states", "trajectory_states", "expected_outputs",
            "evenly_spaced"]
 
 #: Seed of the self-test states (the set is a pure function of config and n).
@@ -34,9 +35,16 @@ def layouts(model: Model) -> tuple[RecordLayout, RecordLayout]:
     return topo.input_record.bind(nf), topo.output_record.bind(nf)
 
 
+def in_step_format(model: Model, tables: Any, x: np.ndarray) -> np.ndarray:
+    """Input records ``x`` (float32 SI values, or already in the step's format) in the format of
+    ``tables`` (``tables.nf``: the derived step's format, bound to its scaling)."""
+    return in_format(x, topology_of(model).input_record.bind(tables.nf))
+
+
 def selftest_states(model: Model, tables: Any, n: int, seed: int = SELFTEST_SEED) -> np.ndarray:
-    """``n`` deterministic self-test states of the model's topology (guard cases first)."""
-    return topology_of(model).selftest_states(model, tables, n, seed)
+    """``n`` deterministic self-test states of the model's topology (guard cases first), in the
+    step's format."""
+    return in_step_format(model, tables, topology_of(model).selftest_states(model, tables, n, seed))
 
 
 def evenly_spaced(x: np.ndarray, n: int) -> np.ndarray:

@@ -82,6 +82,12 @@ uint32_t mpc_f32_bits(float value)
     return bits;
 }
 
+uint32_t mpc_i32_value(int32_t value)
+{
+    /* int32 -> uint32 is defined (modulo 2^32); spelled out so -Wsign-conversion is satisfied */
+    return (value < 0) ? (uint32_t)0xFFFFFFFFu - (uint32_t)(-(value + 1)) : (uint32_t)value;
+}
+
 uint32_t mpc_u16_value(uint16_t value)
 {
     return (uint32_t)value;

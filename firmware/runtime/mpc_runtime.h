@@ -36,6 +36,10 @@ uint32_t mpc_overhead(uint16_t n);
 /* Bits of a float32 (no byte pointers: the object is copied whole). */
 uint32_t mpc_f32_bits(float value);
 
+/* Bits of an int32 (two's complement), as a uint32 without undefined or
+ * implementation-defined behaviour (fixed-point records). */
+uint32_t mpc_i32_value(int32_t value);
+
 /* A uint16 field as a 32-bit value. */
 uint32_t mpc_u16_value(uint16_t value);
 

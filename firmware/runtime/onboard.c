@@ -200,11 +200,11 @@ void onboard_run(const hil_setpoints_t *sp, uint32_t overhead, onb_emit_fn emit,
         ibe = p.x[0] * sn + p.x[1] * cs;
         t_ref = (ONB_SPEED_IMPOSED != 0) ? load : speed_pi(&integral, w_ref, p.x[2]);
         /* 4. controller */
-        in.ia_a = ial;
-        in.ib_a = -0.5f * ial + ONB_SQRT3_HALF * ibe;
-        in.theta_e_rad = p.x[3];
-        in.omega_e_rad_s = ONB_POLE_PAIRS * p.x[2];
-        in.torque_ref_nm = t_ref;
+        in.ia_a = MPC_ENCODE_ia_a(ial);
+        in.ib_a = MPC_ENCODE_ib_a(-0.5f * ial + ONB_SQRT3_HALF * ibe);
+        in.theta_e_rad = MPC_ENCODE_theta_e_rad(p.x[3]);
+        in.omega_e_rad_s = MPC_ENCODE_omega_e_rad_s(ONB_POLE_PAIRS * p.x[2]);
+        in.torque_ref_nm = MPC_ENCODE_torque_ref_nm(t_ref);
         onb_topo_input(&p, &in);
         raw = mpc_timed_step(&in, &out);
         cyc = (raw > overhead) ? raw - overhead : 0u;
@@ -239,8 +239,8 @@ void onboard_run(const hil_setpoints_t *sp, uint32_t overhead, onb_emit_fn emit,
             r->omega_m = p.x[2];
             r->te_nm = 1.5f * ONB_POLE_PAIRS * (ONB_PSI_F * p.x[1] + (ONB_LD - ONB_LQ) * p.x[0] * p.x[1]);
             r->torque_ref = t_ref;
-            r->ia_a = in.ia_a;
-            r->ib_a = in.ib_a;
+            r->ia_a = (float)MPC_DECODE_ia_a(in.ia_a);
+            r->ib_a = (float)MPC_DECODE_ib_a(in.ib_a);
             r->decision = dec;
             r->fault = out.fault;
             ++nbuf;

@@ -19,7 +19,13 @@
  * becomes voltage segments, the timing rule) is in onboard_<topology>.c,
  * the one file of the build that implements the onb_topo_* functions below.
  *
- * C99, C28x-safe: float only (no double), no 8-bit types, no byte pointers.
+ * The controller's real inputs and outputs are reached through the generated
+ * MPC_ENCODE_<field> / MPC_DECODE_<field> of mpc_binding.h (SI value <-> the
+ * step's number format: float32 a cast, fixed point a Q-format count), so the
+ * same plant drives either format.
+ *
+ * C99, C28x-safe: float only (no double arithmetic of our own), no 8-bit
+ * types, no byte pointers.
  */
 #ifndef ONBOARD_H
 #define ONBOARD_H

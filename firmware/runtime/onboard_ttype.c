@@ -20,7 +20,8 @@
 #define ONB_SQRT3_HALF_T 0.8660254f
 
 static uint16_t applied_vector;
-static float applied_t_n;
+/* the applied decision's t_n_s, in the step's number format (fed back as t_n_prev_s) */
+static mpc_output_t applied_out;
 static uint16_t applied_states[ONB_N_SEG];
 static float applied_seg[ONB_N_SEG];
 
@@ -28,7 +29,7 @@ void onb_topo_reset(void)
 {
     uint16_t i;
     applied_vector = ONB_OOO;
-    applied_t_n = 0.0f;
+    applied_out.t_n_s = MPC_ENCODE_t_n_s(0.0f);
     for (i = 0u; i < ONB_N_SEG; ++i) {
         applied_states[i] = ONB_OOO;
         applied_seg[i] = 0.0f;
@@ -38,10 +39,10 @@ void onb_topo_reset(void)
 
 void onb_topo_input(const onb_plant_t *p, mpc_input_t *in)
 {
-    in->uc1_v = 0.5f * ONB_UDC + p->x[4];
-    in->uc2_v = 0.5f * ONB_UDC - p->x[4];
+    in->uc1_v = MPC_ENCODE_uc1_v(0.5f * ONB_UDC + p->x[4]);
+    in->uc2_v = MPC_ENCODE_uc2_v(0.5f * ONB_UDC - p->x[4]);
     in->prev_vector = applied_vector;
-    in->t_n_prev_s = applied_t_n;
+    in->t_n_prev_s = applied_out.t_n_s;
 }
 
 uint16_t onb_topo_decision(const mpc_output_t *out)
@@ -96,7 +97,7 @@ int16_t onb_topo_apply(onb_plant_t *p, const mpc_output_t *out, float load_nm)
         bad = 1u;
     }
     for (i = 0u; i < ONB_N_SEG; ++i) {
-        const float d = out->seg_s[i];
+        const float d = (float)MPC_DECODE_seg_s(out->seg_s[i]);
         if (out->states[i] >= ONB_N_STATES || !(d >= 0.0f && d <= ONB_DT * 2.0f)) {
             bad = 1u;
         }
@@ -119,7 +120,7 @@ int16_t onb_topo_apply(onb_plant_t *p, const mpc_output_t *out, float load_nm)
         return -3;
     }
     applied_vector = out->vector;
-    applied_t_n = out->t_n_s;
+    applied_out.t_n_s = out->t_n_s;
     for (i = 0u; i < ONB_N_SEG; ++i) {
         applied_states[i] = out->states[i];
         applied_seg[i] = next_seg[i];

@@ -21,7 +21,7 @@ void onb_topo_reset(void)
 void onb_topo_input(const onb_plant_t *p, mpc_input_t *in)
 {
     (void)p;
-    in->udc_v = ONB_UDC;
+    in->udc_v = MPC_ENCODE_udc_v(ONB_UDC);
     in->prev_sw = prev_sw;
 }
 

@@ -16,14 +16,14 @@ uint32_t mpc_values_crc(uint32_t crc, const uint32_t *values, const mpc_value_de
 {
     uint16_t k;
     for (k = 0u; k < n; ++k) {
-        crc = mpc_crc32(crc, values[k], (desc[k].kind == MPC_VALUE_F32) ? 4u : 2u);
+        crc = mpc_crc32(crc, values[k], (desc[k].kind == MPC_VALUE_U16) ? 2u : 4u);
     }
     return crc;
 }
 
 static void put_value(const mpc_value_desc_t *d, uint32_t v)
 {
-    if (d->kind == MPC_VALUE_F32) {
+    if (d->kind != MPC_VALUE_U16) {
         console_put_hex32(v);
     } else {
         console_put_u32(v);

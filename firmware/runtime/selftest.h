@@ -6,7 +6,7 @@
  *
  * The generated mpc_values.h gives the value counts and the data's config
  * hash; the generated mpc_values.c flattens records into uint32_t values
- * (a float as its bits, a uint16_t as its value) in interface order; the
+ * (a float or an int32 as its bits, a uint16_t as its value) in interface order; the
  * generated mpc_selftest_data.c holds the test sets.
  *
  * Console lines (one per line, fields " key=value"):
@@ -16,7 +16,7 @@
  *   CYC      v v v ...                   net cycles of each step (dump sets only)
  *   SUMMARY  set n mismatches crc_in crc_out cyc_min cyc_max cyc_mean overhead unit
  * crc_in / crc_out: CRC-32 (zlib) of every input / output value of the set in
- * order, floats as 4 and uint16_t as 2 little-endian octets; the host
+ * order, floats and int32 as 4 and uint16_t as 2 little-endian octets; the host
  * recomputes crc_out from the reference, so an image that only claimed
  * success could not pass.
  */
@@ -31,6 +31,7 @@
 /* Kind of a flattened value. */
 #define MPC_VALUE_F32 1u
 #define MPC_VALUE_U16 2u
+#define MPC_VALUE_I32 3u /* an int32 (fixed point) as its two's complement bits */
 
 /* Mismatching states reported in detail per set (all are counted). */
 #ifndef MPC_SELFTEST_MAX_DETAILS
@@ -39,7 +40,7 @@
 
 typedef struct {
     const char *name;   /* field name, "costs[3]" for array elements */
-    uint16_t kind;      /* MPC_VALUE_F32 or MPC_VALUE_U16 */
+    uint16_t kind;      /* MPC_VALUE_F32, MPC_VALUE_I32 or MPC_VALUE_U16 */
 } mpc_value_desc_t;
 
 extern const mpc_value_desc_t mpc_input_desc[MPC_INPUT_NVALUES];

@@ -28,7 +28,10 @@ SHORT_2L = {"scenario.duration_s": 0.2, "scenario.speed_ref_rpm": [[0.0, 500.0],
             "scenario.load_nm": [[0.0, 10.0], [0.05, -10.0]], "controller.tables": "published"}
 SHORT_2L_ARGS = ["--set", "scenario.duration_s=0.2", "--set", "scenario.speed_ref_rpm=[[0.0,500.0],[0.1,-500.0]]",
                  "--set", "scenario.load_nm=[[0.0,10.0],[0.05,-10.0]]", "--set", "controller.tables=published"]
-CASES = [(SPMSM, "s2", SHORT_2L), (SPMSM, "s3", SHORT_2L), (TLEVEL, "mpdtc63", {}), (TLEVEL, "mpdtc27", {})]
+FIXED = {"controller.number_format": "fixed"}
+CASES = [(SPMSM, "s2", SHORT_2L), (SPMSM, "s3", SHORT_2L), (TLEVEL, "mpdtc63", {}), (TLEVEL, "mpdtc27", {}),
+         (SPMSM, "s2", {**SHORT_2L, **FIXED}), (TLEVEL, "mpdtc27", FIXED)]
+IDS = [f"{c.stem}-{s}" + ("-fixed" if o.get("controller.number_format") == "fixed" else "") for c, s, o in CASES]
 
 
 def model_of(config, strategy: str, overrides: dict) -> tuple[Model, object]:
@@ -43,7 +46,7 @@ def simulate(m: Model, t: object):
 
 
 @pytest.mark.board
-@pytest.mark.parametrize("config,strategy,overrides", CASES, ids=[f"{c.stem}-{s}" for c, s, _ in CASES])
+@pytest.mark.parametrize("config,strategy,overrides", CASES, ids=IDS)
 def test_closed_loop_equals_simulate(board, config, strategy, overrides):
     m, t = model_of(config, strategy, overrides)
     data = run_mode(board, closed_loop, m, t)

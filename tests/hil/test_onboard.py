@@ -33,7 +33,11 @@ SHORT_2L = {"scenario.duration_s": 0.2, "scenario.speed_ref_rpm": [[0.0, 500.0],
             "scenario.load_nm": [[0.0, 10.0], [0.05, -10.0]], "controller.tables": "published"}
 SHORT_2L_ARGS = ["--set", "scenario.duration_s=0.2", "--set", "scenario.speed_ref_rpm=[[0.0,500.0],[0.1,-500.0]]",
                  "--set", "scenario.load_nm=[[0.0,10.0],[0.05,-10.0]]", "--set", "controller.tables=published"]
+FIXED = {"controller.number_format": "fixed"}
 CASES = [(SPMSM, "s2", SHORT_2L), (TLEVEL, "mpdtc27", {"scenario.duration_s": 0.1})]
+#: the same, plus both in fixed point (the plant feeds the step through MPC_ENCODE_* / MPC_DECODE_*)
+BOTH_FORMATS = CASES + [(c, s, {**o, **FIXED}) for c, s, o in CASES]
+IDS = [f"{c.stem}-{s}" + ("-fixed" if o.get("controller.number_format") == "fixed" else "") for c, s, o in BOTH_FORMATS]
 
 
 def model_of(config, strategy: str, overrides: dict):
@@ -54,7 +58,7 @@ def check(data: dict, decimation: int = 1) -> None:
 
 
 @pytest.mark.board
-@pytest.mark.parametrize("config,strategy,overrides", CASES, ids=[f"{c.stem}-{s}" for c, s, _ in CASES])
+@pytest.mark.parametrize("config,strategy,overrides", BOTH_FORMATS, ids=IDS)
 def test_onboard_metrics_match_simulate(board, config, strategy, overrides):
     m, t = model_of(config, strategy, overrides)
     check(run_mode(board, onboard, m, t))

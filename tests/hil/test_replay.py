@@ -28,6 +28,23 @@ def test_replay_every_strategy_bit_for_bit(board, config, strategy):
     assert 0 <= data["cycles_min"] <= data["cycles_median"] <= data["cycles_p99"] <= data["cycles_max"]
 
 
+@pytest.mark.parametrize("config,strategy", [("spmsm", "conventional"), ("spmsm", "s3"), ("tlevel", "mpdtc27")])
+def test_replay_fixed_point_bit_for_bit(board, config, strategy):
+    """Fixed point: int32 members on the wire, a schema of its own, every state bit for bit."""
+    m, t = example(config, strategy, "fixed")
+    schema = Schema.of(m)
+    assert {f.ctype for f in schema.input.members + schema.output.members} <= {"int32_t", "uint16_t"}
+    assert schema.number_format == "fixed"
+    assert schema.schema_hash != Schema.of(example(config, strategy, "float32")[0]).schema_hash
+    sets = replay_states(m, t, 3000)
+    with board(m, t) as link:
+        session = Session(link, schema)
+        session.handshake()
+        data = replay(session, m, t, sets, show_progress=False)
+    assert data["states"] == data["answered"] == 3000
+    assert data["mismatches"] == 0 and data["lost"] == 0, data["first_mismatches"]
+
+
 def test_ping_echoes_cobs_edge_payloads(board):
     """PONG returns every payload unchanged: the C COBS decoder and encoder at block boundaries."""
     m, t = example("spmsm", "s1")

@@ -35,3 +35,24 @@ def test_emulated_bench(tmp_path):
         assert e["m7_instructions_per_step"] > 50 and e["ratio_to_conventional"] > 0
     # every simplified strategy holds the zero vector on most samples: cheaper median
     assert data["strategies"]["s3"]["m7_instructions_per_step"] < data["strategies"]["conventional"]["m7_instructions_per_step"]
+
+
+@pytest.mark.slow
+def test_emulated_bench_fixed_point_beside_float32(tmp_path, capsys):
+    """A fixed-point config: its own column (self-test bit-exact on the emulated M7, else the bench
+    fails) and the float32 variant's beside it."""
+    require_tool("qemu-system-arm", "qemu-system-arm")
+    require_tool("arm-none-eabi-gcc", "gcc-arm-none-eabi")
+    js = tmp_path / "benchfx.json"
+    assert main(["bench", str(SPMSM), "--number-format", "fixed", "--strategies", "conventional,s3",
+                 "--emulated", "--json", str(js), "--repeats", "1"]) == 0
+    data = json.loads(js.read_text())
+    for s in ("conventional", "s3"):
+        e = data["strategies"][s]
+        assert e["m7_instructions_per_step"] == e["m7_instructions_per_step_fixed"] > 50
+        assert e["m7_instructions_per_step_float32"] > 50
+        by = e["m7_by_number_format"]
+        assert by["fixed"]["mismatches"] == 0 and by["fixed"]["selftest_states"] == 1000 + 2000
+        assert by["float32"]["mismatches"] == 0
+    out = capsys.readouterr().out
+    assert "fixed" in out and "float32" in out

@@ -15,9 +15,9 @@ import numpy as np
 
 from codegen.model import Model
 from codegen.numfmt.float32 import F
-from codegen.teststates import guard_rows, phase_currents, rows_to_records, seeded_mix
+from codegen.teststates import guard_rows, in_format, phase_currents, rows_to_records, seeded_mix
 from codegen.topologies.twolevel.derive import TwoLevelTables, guard_limits
-from codegen.topologies.twolevel.records import INPUT_DTYPE
+from codegen.topologies.twolevel.records import INPUT, INPUT_DTYPE
 from codegen.topologies.twolevel.reference import step_batch
 from codegen.topologies.twolevel.states import flux_border_currents, limits, threshold_states
 
@@ -60,8 +60,8 @@ def _wide(model: Model, rng: np.random.Generator, n: int) -> np.ndarray:
 
 
 def _threshold(model: Model, t: TwoLevelTables, rng: np.random.Generator, n: int) -> np.ndarray:
-    """T* = Te estimate +- eps_T, and one float32 step either side."""
-    x = _operating(model, rng, n)
+    """T* = Te estimate +- eps_T, and one step of the format either side (in the step's format)."""
+    x = in_format(_operating(model, rng, n), INPUT.bind(t.nf))
     threshold_states(x, t, step_batch, rng)
     return x
 
@@ -96,4 +96,4 @@ def selftest_states(model: Model, t: TwoLevelTables, n: int, seed: int) -> np.nd
         (15, partial(_wide, model, rng)),
         (20, lambda k: _threshold(model, t, rng, k)),
         (15, partial(_borders, model, rng)),
-    ])
+    ], INPUT.bind(t.nf))
