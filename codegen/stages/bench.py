@@ -24,8 +24,7 @@ import numpy as np
 
 from codegen import __version__
 from codegen.errors import MpcgenError
-from codegen.model import Model
-from codegen.numfmt import FORMATS
+from codegen.model import NUMBER_FORMATS, Model
 from codegen.topology import topology_of
 
 
@@ -43,7 +42,7 @@ def host_ns_per_step(libs: dict, states: np.ndarray, repeats: int) -> dict[str, 
 
 def emulated_instructions(model: Model, strategies: list[str], log: Callable[[str], None]) -> dict[str, dict]:
     """Instructions per step on the emulated Cortex-M7 (QEMU -icount) for each strategy, in every
-    number format (``codegen.numfmt.FORMATS``): strategy -> format name -> figures, or None
+    number format a config can choose (``codegen.model.NUMBER_FORMATS``): strategy -> format name -> figures, or None
     where the config does not fit another format (its error message under ``"error"``).
 
     Each image replays the same 2 000 states of the baseline's recorded
@@ -58,7 +57,7 @@ def emulated_instructions(model: Model, strategies: list[str], log: Callable[[st
     own = model.controller.number_format
     out: dict[str, dict] = {s: {} for s in strategies}
     with tempfile.TemporaryDirectory(prefix="mpcgen-m7-") as tmp:
-        for fmt in (own, *(f for f in FORMATS if f != own)):
+        for fmt in (own, *(f for f in NUMBER_FORMATS if f != own)):
             for s in strategies:
                 variant = model.with_controller(strategy=s, number_format=fmt)
                 log(f"emulated Cortex-M7: building and running {s} ({fmt}) in QEMU")
