@@ -28,10 +28,12 @@ from typing import Any, NoReturn, get_args
 
 from codegen.errors import FILE_FIELD, MISSING, ConfigError, Marker
 from codegen.model import (
+    COST_FORMS,
     FAULT_ACTIONS,
     NUMBER_FORMATS,
     PLACEMENTS,
     PREDICTORS,
+    PSI_REFS,
     SCENARIO_SETS,
     STRATEGIES_BY_TOPOLOGY,
     TABLE_SOURCES,
@@ -231,6 +233,8 @@ SCHEMA: dict[str, Spec] = {
     "controller.tables_file": Spec(PATH),
     "controller.dt_s": _real(_cc(1e-6, 1e-3)),
     "controller.psi_ref_wb": _real(_oc(0, 10)),
+    "controller.psi_ref": _choice(PSI_REFS),
+    "controller.cost": _choice(COST_FORMS),
     "controller.eps_t_nm": _real(_co(0, Ref("motor.rated_torque_nm"))),
     "controller.number_format": _choice(NUMBER_FORMATS),
     "controller.fixed_q": Spec(INT, _cc(8, 30)),

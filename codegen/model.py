@@ -23,6 +23,8 @@ SpeedMode = Literal["mechanical", "imposed"]
 FaultAction = Literal["gates-off", "active-short-circuit"]
 ScenarioSet = Literal["config", "mpdtc-table5"]
 Placement = Literal["tcm", "default"]
+PsiRef = Literal["constant", "mtpa"]
+CostForm = Literal["rated", "reference"]
 
 #: The strategies of each topology, in report order (the first is the baseline).
 STRATEGIES_BY_TOPOLOGY: dict[str, tuple[str, ...]] = {
@@ -36,6 +38,10 @@ FAULT_ACTIONS: tuple[str, ...] = ("gates-off", "active-short-circuit")
 SCENARIO_SETS: tuple[str, ...] = ("config", "mpdtc-table5")
 PLACEMENTS: tuple[str, ...] = ("tcm", "default")
 NUMBER_FORMATS: tuple[str, ...] = ("float32", "fixed")
+#: two-level flux reference psi*: controller.psi_ref_wb, or MTPA from the torque reference
+PSI_REFS: tuple[str, ...] = ("constant", "mtpa")
+#: two-level cost normalisation of the torque error: rated torque, or the torque reference (seed 001 eq. (5))
+COST_FORMS: tuple[str, ...] = ("rated", "reference")
 
 
 @dataclass(frozen=True)
@@ -98,6 +104,10 @@ class Controller:
     fault_action: FaultAction = "gates-off"
     #: active short circuit only at or above this mechanical speed (below it: gates off), r/min
     asc_min_speed_rpm: float = 0.0
+    #: two-level flux reference: "constant" (psi_ref_wb) or "mtpa" (psi* of the MTPA point for |T*|)
+    psi_ref: PsiRef = "constant"
+    #: two-level cost: "rated" (torque error over T_N) or "reference" (over max(|T*|, T_floor), eq. (5))
+    cost: CostForm = "rated"
 
 
 @dataclass(frozen=True)

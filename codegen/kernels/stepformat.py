@@ -42,7 +42,8 @@ CONST_FIELDS: dict[str, str] = {
     "TS_S": "controller.dt_s", "INV_TS": "controller.dt_s", "TS3_S": "controller.dt_s", "TS6_S": "controller.dt_s",
     "TN_MIN_S": "controller.t_n_min_s", "K_VO": "inverter.c_f", "TWO_C": "inverter.c_f",
     "LAMBDA_PSI": "controller.lambda_psi_nm_per_wb", "LAMBDA_VO": "controller.lambda_vo_nm_per_v",
-    "ASC_OMEGA_MIN_RAD_S": "controller.asc_min_speed_rpm",
+    "ASC_OMEGA_MIN_RAD_S": "controller.asc_min_speed_rpm", "MTPA_INV_STEP": "controller.psi_ref",
+    "T_FLOOR_NM": "controller.cost",
 }
 #: constants whose precision is a property of the sin/cos approximation (tested), not checked per constant
 _APPROXIMATION = frozenset(name for name, *_ in sincos_constants())

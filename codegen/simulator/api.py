@@ -20,11 +20,13 @@ from codegen import __version__
 from codegen.hostbuild import SimSources, cache_root
 from codegen.simulator.records import MOTOR_STATE, SIM_PARAMS, SIM_STATE, SIM_TRACE, SimStruct
 
-#: C sources of the shared dq model, RK4, speed PI and period steps (float64, host only).
+#: C sources of the shared dq model, RK4, speed PI, sensors, inverter non-idealities and period steps
+#: (float64, host only).
 CSRC = Path(__file__).resolve().parent / "csrc"
-SHARED_SOURCES: tuple[Path, ...] = (CSRC / "pmsm_dq.c", CSRC / "speed_pi.c", CSRC / "sim_period.c")
+SHARED_SOURCES: tuple[Path, ...] = (CSRC / "pmsm_dq.c", CSRC / "speed_pi.c", CSRC / "sim_sensors.c",
+                                    CSRC / "sim_period.c")
 SHARED_HEADERS: tuple[Path, ...] = (CSRC / "pmsm_dq.h", CSRC / "pmsm_rk4.h", CSRC / "speed_pi.h",
-                                    CSRC / "sim_period.h")
+                                    CSRC / "sim_sensors.h", CSRC / "sim_inverter.h", CSRC / "sim_period.h")
 
 #: File name of the generated API header (the same for every topology: sim_period.h includes it).
 API_NAME = "sim_api.h"

@@ -80,24 +80,59 @@ def scenario_arrays(model: Model) -> tuple[np.ndarray, np.ndarray]:
     return speed, load
 
 
+def _plant_value(override: float | None, controller_value: float) -> float:
+    """The plant's value of a parameter: the ``[plant]`` override, else the controller's model's."""
+    return float(override) if override is not None else float(controller_value)
+
+
 def fill_common_params(p: Any, model: Model) -> Any:
-    """Set the shared parameters ``p.common`` (motor, Udc, dt, speed PI, mode); return ``p``."""
-    m, inv, c, sl = model.motor, model.inverter, model.controller, model.speed_loop
+    """Set the shared parameters ``p.common``; return ``p``.
+
+    The plant's motor and DC link are the controller's (``motor``,
+    ``inverter``) unless ``[plant]`` overrides them (parameter-mismatch
+    studies: the generated controller keeps its own values); the timing
+    (``dt_s``; the actuation delay ``Plant.delay_periods``), the speed PI,
+    the speed mode, and the inverter and sensor non-idealities of
+    ``[plant]`` (0 = off; the ADC full scale defaults to ``inverter.i_trip_a``).
+    """
+    m, inv, c, sl, pl = model.motor, model.inverter, model.controller, model.speed_loop, model.plant
     common = p.common
-    common.rs_ohm = m.rs_ohm
-    common.ld_h = m.ld_h
-    common.lq_h = m.lq_h
-    common.psi_f_wb = m.psi_f_wb
+    common.rs_ohm = _plant_value(pl.rs_ohm, m.rs_ohm)
+    common.ld_h = _plant_value(pl.ld_h, m.ld_h)
+    common.lq_h = _plant_value(pl.lq_h, m.lq_h)
+    common.psi_f_wb = _plant_value(pl.psi_f_wb, m.psi_f_wb)
     common.pole_pairs = int(m.pole_pairs)
-    common.j_kgm2 = m.j_kgm2
-    common.b_nms = m.b_nms
-    common.udc_v = inv.udc_v
+    common.j_kgm2 = _plant_value(pl.j_kgm2, m.j_kgm2)
+    common.b_nms = _plant_value(pl.b_nms, m.b_nms)
+    common.udc_v = plant_udc_v(model)
     common.dt_s = c.dt_s
     common.kp = sl.kp
     common.ki = sl.ki
     common.limit_nm = sl.limit_nm
     common.speed_imposed = 1 if model.scenario.speed_mode == "imposed" else 0
+    common.delay_periods = int(pl.delay_periods(c.delay_compensation))
+    common.dead_time_s = float(pl.dead_time_s)
+    common.device_drop_v = float(pl.device_drop_v)
+    common.current_gain_error = float(pl.current_gain_error)
+    common.current_offset_a = float(pl.current_offset_a)
+    common.adc_bits = int(pl.adc_bits)
+    common.adc_full_scale_a = _plant_value(pl.adc_full_scale_a, inv.i_trip_a)
+    common.noise_a = float(pl.noise_a)
+    common.noise_seed = int(pl.noise_seed)
+    common.encoder_bits = int(pl.encoder_bits)
+    common.measurement_delay_s = float(pl.measurement_delay_s)
     return p
+
+
+def plant_udc_v(model: Model) -> float:
+    """The plant's DC-link voltage (``plant.udc_v``, else ``inverter.udc_v``); the controller measures it."""
+    return _plant_value(model.plant.udc_v, model.inverter.udc_v)
+
+
+def delay_periods(model: Model) -> int:
+    """The plant's actuation delay d in periods (``plant.actuation_delay_periods``, else 1 with
+    ``controller.delay_compensation``, 0 without)."""
+    return int(model.plant.delay_periods(model.controller.delay_compensation))
 
 
 def trace_fields(trace: SimStruct) -> dict[str, tuple[np.dtype, int]]:
@@ -164,15 +199,17 @@ def motor_inputs(trace: Any, model: Model, layout: RecordLayout) -> np.ndarray:
     fields every topology's loop fills alike.
 
     ``ia_a``, ``ib_a``, ``theta_e_rad``, ``omega_e_rad_s`` = p*omega_m and
-    ``torque_ref_nm``: each the float64 sample converted to the format as
-    the C loop's ``MPC_ENCODE_*`` does (sim_period.h step 4; float32:
-    rounded once); the other fields are zero.
+    ``torque_ref_nm``: what the controller saw (the trace's ``*_meas_*``
+    fields: the samples through the sensors, equal to the plant's values
+    with ideal sensors), each float64 value converted to the format as the
+    C loop's ``MPC_ENCODE_*`` does (sim_period.h step 4; float32: rounded
+    once); the other fields are zero.
     """
     rec = layout.zeros(trace.n)
-    rec["ia_a"] = layout.encode("ia_a", trace.ia_a)
-    rec["ib_a"] = layout.encode("ib_a", trace.ib_a)
-    rec["theta_e_rad"] = layout.encode("theta_e_rad", trace.theta_e_rad)
-    rec["omega_e_rad_s"] = layout.encode("omega_e_rad_s", float(model.motor.pole_pairs) * trace.omega_m_rad_s)
+    rec["ia_a"] = layout.encode("ia_a", trace.ia_meas_a)
+    rec["ib_a"] = layout.encode("ib_a", trace.ib_meas_a)
+    rec["theta_e_rad"] = layout.encode("theta_e_rad", trace.theta_e_meas_rad)
+    rec["omega_e_rad_s"] = layout.encode("omega_e_rad_s", float(model.motor.pole_pairs) * trace.omega_m_meas_rad_s)
     rec["torque_ref_nm"] = layout.encode("torque_ref_nm", trace.torque_ref_nm)
     return rec
 

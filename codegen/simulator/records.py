@@ -23,7 +23,7 @@ from codegen.numfmt.float32 import FLOAT32
 from codegen.records import Field, Record, RecordLayout, fields
 
 __all__ = [
-    "SimStruct", "StructMember", "MOTOR_STATE", "SIM_PARAMS", "SIM_STATE", "SIM_TRACE",
+    "SimStruct", "StructMember", "MOTOR_STATE", "SIM_PARAMS", "SIM_STATE", "SIM_TRACE", "ENCODER_WINDOW",
 ]
 
 #: name of the member holding the base struct
@@ -104,28 +104,47 @@ MOTOR_STATE = SimStruct("pmsm_state_t", "plant motor state (dq frame, d axis on 
     theta_e_rad    f64   1  electrical rotor angle, rad, in [0, 2*pi) between calls
 """)))
 
-#: Parameters every simulator takes: motor, stiff DC link, timing, speed PI (SI units).
-SIM_PARAMS = SimStruct("sim_params_t", "motor, DC link, timing, speed loop (every topology)", Record("sim_params", fields("""
-    rs_ohm         f64   1  stator resistance Rs, ohm
-    ld_h           f64   1  d-axis inductance Ld, H
-    lq_h           f64   1  q-axis inductance Lq, H
-    psi_f_wb       f64   1  permanent-magnet flux linkage psi_f, Wb
-    pole_pairs     i32   1  pole pairs p
-    j_kgm2         f64   1  rotor + load inertia J, kg*m^2 (> 0 unless the speed is imposed)
-    b_nms          f64   1  viscous friction B, N*m*s/rad
-    udc_v          f64   1  DC-link voltage Udc, V (stiff source)
-    dt_s           f64   1  control (sampling) period, s
-    kp             f64   1  speed PI proportional gain, N*m/(rad/s)
-    ki             f64   1  speed PI integral gain, N*m/rad
-    limit_nm       f64   1  speed PI output and integrator clamp, +-N*m
-    speed_imposed  i32   1  1: omega_m follows speed_ref, T* = load_nm
+#: Parameters every simulator takes: the plant's motor and stiff DC link (the controller's values unless
+#: ``[plant]`` overrides them), timing, speed PI, the plant's actuation delay, inverter and sensor
+#: non-idealities (SI units; every non-ideality 0 = off).
+SIM_PARAMS = SimStruct("sim_params_t", "plant motor, DC link, timing, speed loop, non-idealities (every topology)", Record("sim_params", fields("""
+    rs_ohm               f64   1  plant stator resistance Rs, ohm
+    ld_h                 f64   1  plant d-axis inductance Ld, H
+    lq_h                 f64   1  plant q-axis inductance Lq, H
+    psi_f_wb             f64   1  plant permanent-magnet flux linkage psi_f, Wb
+    pole_pairs           i32   1  pole pairs p
+    j_kgm2               f64   1  plant rotor + load inertia J, kg*m^2 (> 0 unless the speed is imposed)
+    b_nms                f64   1  plant viscous friction B, N*m*s/rad
+    udc_v                f64   1  plant DC-link voltage Udc, V (stiff source; the controller measures it)
+    dt_s                 f64   1  control (sampling) period, s
+    kp                   f64   1  speed PI proportional gain, N*m/(rad/s)
+    ki                   f64   1  speed PI integral gain, N*m/rad
+    limit_nm             f64   1  speed PI output and integrator clamp, +-N*m
+    speed_imposed        i32   1  1: omega_m follows speed_ref, T* = load_nm
+    delay_periods        i32   1  actuation delay d (0..2): the decision from the samples of k acts during [k+d, k+d+1)
+    dead_time_s          f64   1  inverter dead time at every leg edge, s (0: off)
+    device_drop_v        f64   1  forward drop of each conducting device, against the phase current, V (0: off)
+    current_gain_error   f64   1  relative gain error of the current sensors (0: off)
+    current_offset_a     f64   1  current-sensor offset, A (0: off)
+    adc_bits             i32   1  current ADC resolution over +-adc_full_scale_a, bits (0: off)
+    adc_full_scale_a     f64   1  current ADC full scale, A
+    noise_a              f64   1  standard deviation of additive Gaussian current noise, A (0: off)
+    noise_seed           i64   1  seed of the noise generator
+    encoder_bits         i32   1  encoder resolution, 2^bits counts per mechanical revolution (0: ideal angle and speed)
+    measurement_delay_s  f64   1  the samples are taken this long before t_k, s (0..dt_s; 0: at t_k)
 """)))
+
+#: Encoder counts kept for the speed estimate (the difference over this many periods).
+ENCODER_WINDOW = 16
 
 #: State every simulator carries from one run call to the next (chunked runs).
 SIM_STATE = SimStruct("sim_state_t", "carried state every topology has", Record("sim_state", fields("""
-    pi_integral_nm  f64   1  speed PI integrator, N*m
-    k               i64   1  index of the next period (t = k*dt_s)
-""")), nested=(("motor", MOTOR_STATE),))
+    pi_integral_nm       f64   1       speed PI integrator, N*m
+    k                    i64   1       index of the next period (t = k*dt_s)
+    theta_m_rad          f64   1       plant mechanical angle at t_k, unwrapped, rad (the encoder's shaft)
+    sampled_theta_m_rad  f64   1       plant mechanical angle at t_k - measurement_delay_s, rad
+    enc_counts           i64   WINDOW  encoder counts of the last WINDOW samples (period j in slot j mod WINDOW)
+""", WINDOW=ENCODER_WINDOW)), nested=(("motor", MOTOR_STATE), ("sampled", MOTOR_STATE)))
 
 #: Trace members every simulator records at the sample instant t_k (one value per period).
 SIM_TRACE = SimStruct("sim_trace_t", "sample-instant values and decision every topology records", Record("sim_trace", fields("""
@@ -139,6 +158,10 @@ SIM_TRACE = SimStruct("sim_trace_t", "sample-instant values and decision every t
     ib_a             f64   1  plant phase current b, A
     ic_a             f64   1  plant phase current c = -i_a - i_b, A
     theta_e_rad      f64   1  plant electrical angle in [0, 2*pi), rad
+    ia_meas_a        f64   1  i_a as the controller sees it (sensor chain, measurement delay), A
+    ib_meas_a        f64   1  i_b as the controller sees it, A
+    theta_e_meas_rad f64   1  electrical angle as the controller sees it (encoder), in [0, 2*pi), rad
+    omega_m_meas_rad_s f64 1  mechanical speed as the controller and the speed PI see it, rad/s
     vector           u16   1  controller decision out.vector
     n_eval           u16   1  out.n_eval (candidates evaluated, Cal)
     fault            u16   1  out.fault bits

@@ -2,28 +2,39 @@
  * sim_period.h -- the steps of one control period that every topology's
  * closed-loop simulator shares (hand-written runtime, float64).
  *
- * Specification: docs/simulation.md ("Plant", "Sampling",
- * "Timing") and docs/algorithms.md (two-level MPTC) ("Parameters and scenarios":
- * speed PI).  Structs: the generated sim_api.h (from the field lists of
- * codegen/simulator/records.py), included here once per translation unit.
+ * Specification: docs/simulation.md ("Plant", "Sampling", "Timing",
+ * "Sensors") and docs/algorithms.md (two-level MPTC) ("Parameters and
+ * scenarios": speed PI).  Structs: the generated sim_api.h (from the field
+ * lists of codegen/simulator/records.py), included here once per
+ * translation unit.
  *
  * One period k (t_k = k*dt_s) of every topology:
  *  1. speed_imposed != 0: omega_m := speed_ref[k] (the load machine holds
  *     the speed profile).                                    sim_period_sample
- *  2. Sample the plant at t_k: i_a, i_b (inverse Park, inverse Clarke),
- *     theta_e in [0, 2*pi), omega_e = p*omega_m.             sim_period_sample
+ *  2. The plant at t_k (trace): i_a, i_b (inverse Park, inverse Clarke),
+ *     theta_e in [0, 2*pi).                                  sim_period_sample
+ *     What the controller sees (sim_sensors.h): the plant at t_k - tau
+ *     (tau = measurement_delay_s; the state kept from the previous period's
+ *     integration, the plant at t_0 for k = 0), through the current sensors
+ *     and the encoder; omega_e = p*omega_m,meas.  With every non-ideality
+ *     off these are the values at t_k, bit for bit.
  *  3. Torque reference T*(k):                                sim_period_sample
- *     speed_imposed == 0: speed PI (speed_pi.h) in double on the mechanical
- *       speed error e = speed_ref[k] - omega_m (rad/s), T* clamped to
- *       +-limit_nm with conditional-integration anti-windup;
+ *     speed_imposed == 0: speed PI (speed_pi.h) in double on the measured
+ *       mechanical speed error e = speed_ref[k] - omega_m,meas (rad/s), T*
+ *       clamped to +-limit_nm with conditional-integration anti-windup;
  *     speed_imposed != 0: the speed loop is open; T*(k) = load_nm[k], read
  *       as the torque the drive must deliver against the load machine.
- *  4. Controller step with the topology's inputs, every field cast to float
- *     as a real controller sees them (the topology's sim .c).
+ *  4. Controller step with the topology's inputs, every field converted to
+ *     the step's number format as a real controller sees them (the
+ *     topology's sim .c).
  *  5. Record the sample instant and the decision.  sim_period_record
- *  6./7. The topology's timing rule and plant integration over [t_k, t_k+1),
- *     load torque load_nm[k] (ignored when the speed is imposed).
- *  Commit: the plant state, the PI integrator, k += 1.   sim_period_commit
+ *  6./7. The topology's decision queue (actuation delay d = delay_periods:
+ *     the decision of k acts during [t_k+d, t_k+d+1)) and plant integration
+ *     over [t_k, t_k+1) with its dead time and device drops (sim_inverter.h),
+ *     load torque load_nm[k] (ignored when the speed is imposed); the plant
+ *     state at t_k+1 - tau is kept for the next period's samples.
+ *  Commit: the plant state, the mechanical angle, the encoder count, the
+ *  kept samples, the PI integrator, k += 1.                  sim_period_commit
  *
  * C99, no dynamic memory, no global state.  Not part of any cffi cdef.
  */
@@ -36,13 +47,20 @@
 
 #include "sim_api.h"
 
+/* Largest actuation delay, periods (the depth of the topologies' decision queues). */
+#define SIM_PERIOD_MAX_DELAY 2
+
 /* Values of steps 1-3 of one period. */
 typedef struct {
     double w_ref;     /* speed_ref[k], rad/s */
     double load;      /* load_nm[k], N*m */
-    double ia, ib;    /* sampled phase currents, A */
-    double th;        /* sampled electrical angle in [0, 2*pi), rad */
-    double omega_e;   /* p*omega_m, rad/s */
+    double ia, ib;    /* the controller's phase currents (sensor chain), A */
+    double th;        /* the controller's electrical angle in [0, 2*pi), rad */
+    double omega_m;   /* the controller's mechanical speed, rad/s (speed PI input) */
+    double omega_e;   /* p*omega_m (the controller's), rad/s */
+    double ia_plant, ib_plant; /* plant phase currents at t_k, A */
+    double th_plant;  /* plant electrical angle at t_k in [0, 2*pi), rad */
+    int64_t enc_count; /* encoder count of this sample (0 without an encoder) */
     double t_ref;     /* T*, N*m */
     double integral;  /* PI integrator after this period (committed with it), N*m */
 } sim_sample_t;
@@ -61,23 +79,45 @@ typedef struct {
         (in).torque_ref_nm = MPC_ENCODE_torque_ref_nm((v).t_ref); \
     } while (0)
 
-/* Shared parameter checks (pmsm_dq_sim_params_valid); 1 valid, 0 not (p NULL: 0). */
+/* Shared parameter checks (pmsm_dq_sim_params_valid, sim_period_plant_valid); 1 valid, 0 not
+ * (p NULL: 0). */
 int sim_period_params_valid(const sim_params_t *p);
 
-/* Initial state: plant at rest, angle 0, PI integrator 0, k 0. */
+/* Initial state: plant at rest, angles 0, PI integrator 0, k 0, encoder counts 0, the kept
+ * samples equal to the plant. */
 void sim_period_reset(sim_state_t *s);
 
 /* Shared run-argument checks: state, n >= 0, arrays given when n > 0, k >= 0. 1 valid. */
 int sim_period_args_valid(const sim_state_t *s, long n, const double *speed_ref_rad_s,
                           const double *load_nm);
 
+/* Shared parameter checks of the plant timing and non-idealities: delay_periods
+ * 0..SIM_PERIOD_MAX_DELAY, 0 <= dead_time_s < dt_s, device_drop_v >= 0, gain error > -1,
+ * adc_bits 0..30 with adc_full_scale_a > 0 when on, noise_a >= 0, encoder_bits 0..30,
+ * 0 <= measurement_delay_s <= dt_s, all finite.  1 valid. */
+int sim_period_plant_valid(const sim_params_t *p);
+
+/* 1 if period k's samples come from the kept state at t_k - tau (tau > 0, k > 0). */
+int sim_period_delayed(const sim_params_t *p, const sim_state_t *s);
+
+/* Offset into the period of the instant whose plant state the next period samples
+ * (dt_s - measurement_delay_s), or -1 without a measurement delay. */
+double sim_period_snap_offset(const sim_params_t *p);
+
+/* Length of the part of the piece [t0, t0 + len) before the snapshot offset t_snap, or -1 if
+ * the snapshot instant is not in the piece (t_snap < 0: none). */
+static inline double sim_period_snap_split(double t0, double len, double t_snap)
+{
+    return (t_snap >= 0.0 && t_snap >= t0 && t_snap < t0 + len) ? t_snap - t0 : -1.0;
+}
+
 /* Steps 1-3 on the plant motor state x (step 1 may set its speed). */
 void sim_period_sample(const sim_params_t *p, const sim_state_t *s, pmsm_state_t *x,
                        double w_ref, double load, sim_sample_t *out);
 
 /* Step 5, shared trace members of period j: the sample instant (plant
- * torque and flux of x) and the controller's vector, n_eval, fault and
- * estimates. */
+ * torque and flux of x), what the controller saw, and its vector, n_eval,
+ * fault and estimates. */
 void sim_period_record(const sim_trace_t *tr, long j, const sim_params_t *p, const sim_state_t *s,
                        const pmsm_state_t *x, const sim_sample_t *v, uint16_t vector,
                        uint16_t n_eval, uint16_t fault, float te_est_nm, float psi_est_wb);
@@ -103,8 +143,11 @@ static inline void sim_period_motor_store(pmsm_state_t *s, const double *x)
     s->theta_e_rad = x[3];
 }
 
-/* Commit period k: plant motor state, PI integrator, k += 1. */
-void sim_period_commit(sim_state_t *s, const pmsm_state_t *x, double integral);
+/* Commit period k: plant motor state x (at t_k+1), its mechanical angle, the encoder count of v,
+ * the kept plant state at t_k+1 - tau (snap; NULL without a measurement delay), the PI
+ * integrator, k += 1. */
+void sim_period_commit(const sim_params_t *p, sim_state_t *s, const pmsm_state_t *x,
+                       const pmsm_state_t *snap, const sim_sample_t *v);
 
 /*
  * The entry points every topology's simulator has (declared in sim_api.h):

@@ -2,7 +2,9 @@
 
 Everything the generated C and the Python reference share is computed here,
 once: gains in float64 rounded once to the number format (numerics.md), the vector set,
-the zero-vector choice, and the candidate rows of the strategy's switch table.
+the zero-vector choice, the candidate rows of the strategy's switch table, and
+(``controller.psi_ref = "mtpa"``) the table of the MTPA flux reference psi*(|T*|)
+(``mtpa.py``, eq. (M1)-(M2) of docs/algorithms.md).
 Templates only print this; the reference only reads it.
 """
 from __future__ import annotations
@@ -17,7 +19,7 @@ from codegen.kernels.dq import DqModel
 from codegen.kernels.stepformat import motor_ranges, step_format
 from codegen.model import Model
 from codegen.numfmt.scaling import Scaling, Signal
-from codegen.topologies.twolevel import vectors
+from codegen.topologies.twolevel import mtpa, vectors
 
 #: A switch table: [condition][sector] -> candidate vectors (V0 first).
 SwitchTable = tuple[tuple[tuple[int, ...], ...], ...]
@@ -46,7 +48,13 @@ class TwoLevelTables(HasConsts):
     scaling: Scaling | None = None
     #: controller.fault_action: what the gates_off output asks on a fault ("gates-off" | "active-short-circuit")
     fault_action: str = "gates-off"
-
+    #: controller.psi_ref: "constant" (PSI_REF_WB) or "mtpa" (psi* interpolated in psi_tab / psi_slope)
+    psi_ref: str = "constant"
+    #: controller.cost: "rated" or "reference" (flux term weighted by (max(|T*|, T_floor)/T_N)^2)
+    cost: str = "rated"
+    #: mtpa: psi* at |T*| = i dT (Wb, in the format), i = 0..MTPA_SEGMENTS-1, and the slope to the next node
+    psi_tab: tuple[np.generic, ...] = ()
+    psi_slope: tuple[np.generic, ...] = ()
 
     @property
     def row_len(self) -> tuple[int, ...]:
@@ -72,11 +80,14 @@ def _constants(model: Model) -> list[Const]:
         Const("LQ_H", f(m.lq_h), "H", "psi_q = Lq i_q"),
         Const("PSI_F_WB", f(m.psi_f_wb), "Wb", "magnet flux"),
         Const("TE_K", f(1.5 * m.pole_pairs), "", "Te = 1.5 p (psi_d i_q - psi_q i_d)"),
-        Const("PSI_REF_WB", f(c.psi_ref_wb), "Wb", "flux reference psi*"),
-        Const("INV_PSI_REF", f(1 / c.psi_ref_wb), "1/Wb", "cost: (|psi| - psi*)/psi*"),
+    ] + _flux_reference_constants(model) + [
         Const("INV_TN", f(1 / m.rated_torque_nm), "1/(N*m)", "cost: (Te - T*)/T_N"),
         Const("EPS_T_NM", f(c.eps_t_nm), "N*m", "s1-s3: |dT| <= eps_T -> zero vector"),
-    ] + sector_constants()
+    ]
+    if c.cost == "reference":
+        out.append(Const("T_FLOOR_NM", f(T_FLOOR_OF_RATED * m.rated_torque_nm), "N*m",
+                         "cost reference: T_n = max(|T*|, T_floor), flux weight (T_n/T_N)^2"))
+    out += sector_constants()
     if c.predictor == "flux-geometry":
         out += [
             Const("VDT_K", f(2.0 / 3.0 * c.dt_s), "s", "psi+ = psi + V dt, |V| = 2/3 Udc"),
@@ -92,17 +103,80 @@ def _constants(model: Model) -> list[Const]:
     return out + fault_action_constants(model)
 
 
+#: controller.cost = "reference": T_floor = 0.05 T_N, the normalising torque at |T*| < T_floor
+T_FLOOR_OF_RATED = 0.05
+
+
+def mtpa_table(model: Model) -> tuple[np.ndarray, np.ndarray, float]:
+    """psi*(|T*|) table of ``controller.psi_ref = "mtpa"`` over [0, T*_guard] (float64): nodes, slopes, 1/dT
+    (``mtpa.flux_table``, eq. (M1)-(M2))."""
+    return mtpa.flux_table(model.motor, guard_limits(model)["TORQUE_REF_GUARD_NM"])
+
+
+def psi_ref_range(model: Model) -> tuple[float, float]:
+    """(smallest, largest) psi* the step uses (float64, Wb): psi_ref_wb, or the MTPA table's nodes
+    (linear interpolation stays between them)."""
+    c = model.controller
+    if c.psi_ref == "constant":
+        return c.psi_ref_wb, c.psi_ref_wb
+    nodes, slopes, _ = mtpa_table(model)
+    ends = np.concatenate([nodes, nodes + slopes])
+    return float(ends.min()), float(ends.max())
+
+
+def _flux_reference_constants(model: Model) -> list[Const]:
+    """psi* and 1/psi* (constant), or the MTPA table's 1/dT (the table itself: ``psi_tab``, ``psi_slope``)."""
+    c = model.controller
+    if c.psi_ref == "constant":
+        return [Const("PSI_REF_WB", float(c.psi_ref_wb), "Wb", "flux reference psi*"),
+                Const("INV_PSI_REF", float(1 / c.psi_ref_wb), "1/Wb", "cost: (|psi| - psi*)/psi*")]
+    _, _, inv_step = mtpa_table(model)
+    return [Const("MTPA_INV_STEP", float(inv_step), "1/(N*m)",
+                  f"psi* table: x = |T*|/dT, {mtpa.MTPA_SEGMENTS} segments up to the T* guard")]
+
+
+def _flux_term_bound(model: Model, psi_max: float) -> float:
+    """Largest |w (|psi| - psi*)/psi*| (float64): |psi| <= psi_max; w = 1 (rated) or T_n/T_N
+    (reference, T_n = max(|T*|, T_floor) <= T*_guard).  MTPA: per table segment, the weight at
+    its upper end over the smaller psi* of its ends (psi* and w are linear in |T*| there)."""
+    m, c = model.motor, model.controller
+    t_guard = guard_limits(model)["TORQUE_REF_GUARD_NM"]
+
+    def w(t: np.ndarray | float) -> np.ndarray:
+        tn = np.maximum(t, T_FLOOR_OF_RATED * m.rated_torque_nm)
+        return tn / m.rated_torque_nm if c.cost == "reference" else np.ones_like(np.asarray(t, np.float64))
+
+    if c.psi_ref == "constant":
+        return float(w(t_guard) * (psi_max + c.psi_ref_wb) / c.psi_ref_wb)
+    nodes, slopes, inv_step = mtpa_table(model)
+    t_hi = (np.arange(len(nodes)) + 1.0) / inv_step
+    lo = np.minimum(nodes, nodes + slopes)
+    return float(np.max(w(t_hi) * (psi_max + lo) / lo))
+
+
 def cost_bounds(model: Model) -> list[Signal]:
     """Worst cases of the cost and its terms (fixed-point ranges): |e_T| <= (Te_max + T*_guard)/T_N,
-    |e_psi| <= (psi_max + psi*)/psi*, g <= e_T^2 + e_psi^2 (dimensionless)."""
+    |e_psi| <= max w (psi_max + psi*)/psi* (``_flux_term_bound``; w = 1 rated, T_n/T_N reference),
+    g <= e_T^2 + e_psi^2 (dimensionless); the reference cost's w <= T*_guard/T_N; the MTPA table's
+    psi* <= its largest node, 1/psi* <= 1/its smallest, position x = |T*|/dT <= segments."""
     m, c = model.motor, model.controller
     _, sigs = motor_ranges(model)
     te_max, psi_max = sigs[2].max_abs, sigs[1].max_abs
-    e_t = (te_max + guard_limits(model)["TORQUE_REF_GUARD_NM"]) / m.rated_torque_nm
-    e_p = (psi_max + c.psi_ref_wb) / c.psi_ref_wb
-    return [Signal("e_T (cost torque term)", "", e_t, "motor.rated_torque_nm"),
-            Signal("e_psi (cost flux term)", "", e_p, "controller.psi_ref_wb"),
-            Signal("g (cost)", "", e_t * e_t + e_p * e_p, "motor.rated_torque_nm")]
+    t_guard = guard_limits(model)["TORQUE_REF_GUARD_NM"]
+    e_t = (te_max + t_guard) / m.rated_torque_nm
+    e_p = _flux_term_bound(model, psi_max)
+    field = "controller.psi_ref" if c.psi_ref == "mtpa" else "controller.psi_ref_wb"
+    out = [Signal("e_T (cost torque term)", "", e_t, "motor.rated_torque_nm"),
+           Signal("e_psi (cost flux term)", "", e_p, field),
+           Signal("g (cost)", "", e_t * e_t + e_p * e_p, "motor.rated_torque_nm")]
+    if c.cost == "reference":
+        out.append(Signal("w = T_n/T_N (cost flux weight)", "", t_guard / m.rated_torque_nm, "controller.cost"))
+    if c.psi_ref == "mtpa":
+        lo, hi = psi_ref_range(model)
+        out += [Signal("psi* (MTPA table)", "Wb", hi, "controller.psi_ref"),
+                Signal("1/psi* (MTPA)", "1/Wb", 1.0 / lo, "controller.psi_ref"),
+                Signal("x = |T*|/dT (MTPA table position)", "", float(mtpa.MTPA_SEGMENTS), "controller.psi_ref")]
+    return out
 
 
 def table_layout(strategy: str) -> tuple[int, int, bool]:
@@ -132,6 +206,12 @@ def derive_two_level(model: Model, switch_table: SwitchTable | None = None) -> T
         rows = tuple(tuple(cell) for row in switch_table for cell in row)
     ux, uy = vectors.unit_vectors()
     nf, consts = step_format(model, _constants(model), cost_bounds(model))
+    psi_tab: tuple[np.generic, ...] = ()
+    psi_slope: tuple[np.generic, ...] = ()
+    if c.psi_ref == "mtpa":
+        nodes, slopes, _ = mtpa_table(model)
+        psi_tab = tuple(nf.const(float(v), "Wb") for v in nodes)
+        psi_slope = tuple(nf.const(float(v), "Wb") for v in slopes)
     return TwoLevelTables(
         prefix=model.prefix,
         strategy=c.strategy,
@@ -150,4 +230,8 @@ def derive_two_level(model: Model, switch_table: SwitchTable | None = None) -> T
         number_format=nf.name,
         scaling=nf.scaling,
         fault_action=model.controller.fault_action,
+        psi_ref=c.psi_ref,
+        cost=c.cost,
+        psi_tab=psi_tab,
+        psi_slope=psi_slope,
     )

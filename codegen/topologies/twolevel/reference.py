@@ -7,9 +7,11 @@ the same sequence; ``verify`` proves the two equal bit for bit.
 
 Equations (mptc-two-level.md): Clarke/Park and the current-model flux
 (Conventions; ``codegen.kernels.frames``, ``codegen.kernels.dq``);
-predictors ``flux-geometry`` and ``dq-euler`` (Predictors); the squared,
-rated-normalised cost (Cost); strategies conventional, s1, s2, s3
-(Strategies); the input guard (numerics.md; ``codegen.kernels.guard``).
+predictors ``flux-geometry`` and ``dq-euler`` (Predictors); the flux
+reference psi* (constant, or MTPA interpolated over |T*|, eq. (M1)-(M3) of
+docs/algorithms.md); the squared cost, rated or reference-normalised (Cost,
+eq. (C1)-(C2)); strategies conventional, s1, s2, s3 (Strategies); the input
+guard (numerics.md; ``codegen.kernels.guard``).
 """
 from __future__ import annotations
 
@@ -30,6 +32,31 @@ from codegen.topologies.twolevel.records import FAULT, GUARD, INPUT, N_VECTORS, 
 def guard(t: TwoLevelTables, x: np.ndarray) -> np.ndarray:
     """Fault bits per state (numerics.md: non-finite or out-of-range inputs)."""
     return evaluate(t.nf.ops, GUARD, FAULT, Constants(t.consts), x)
+
+
+def flux_reference(t: TwoLevelTables, o: Any, k: Any, tref: Any) -> tuple[Any, Any]:
+    """(psi*, 1/psi*) for torque references ``tref`` through the ops ``o`` (constants ``k``).
+
+    constant: (PSI_REF_WB, INV_PSI_REF).  mtpa (eq. (M3)): x = |T*| MTPA_INV_STEP,
+    i = min(trunc(x), segments - 1), psi* = psi_tab[i] + (x - i) psi_slope[i], 1/psi* = 1/psi*
+    (one division).  Also what a caller classifying d_psi = psi* - |psi| needs (the s3 condition).
+    """
+    if t.psi_ref == "constant":
+        return k.PSI_REF_WB, k.INV_PSI_REF
+    x = o.mul(o.abs(tref), k.MTPA_INV_STEP)
+    i = np.minimum(np.asarray(o.trunc_int(x), np.int64), len(t.psi_tab) - 1)
+    frac = o.sub(x, o.from_int(i.astype(np.int32)))
+    tab, slope = o.array(t.psi_tab), o.array(t.psi_slope)
+    psir = o.add(tab[i], o.mul(frac, slope[i]))
+    return psir, o.div(o.const(1.0), psir)
+
+
+def flux_weight(t: TwoLevelTables, o: Any, k: Any, tref: Any) -> Any:
+    """Cost "reference" (eq. (C2)): w = max(|T*|, T_FLOOR) / T_N, the flux term's factor; None for "rated"."""
+    if t.cost != "reference":
+        return None
+    a = o.abs(tref)
+    return o.mul(o.where(o.gt(a, k.T_FLOOR_NM), a, k.T_FLOOR_NM), k.INV_TN)
 
 
 def step_batch(t: TwoLevelTables, x: np.ndarray) -> np.ndarray:
@@ -96,6 +123,10 @@ def _step(t: TwoLevelTables, x: np.ndarray) -> np.ndarray:
             pd, pq = dq.flux(o, model, id1, iq1)
             return dq.torque(o, k.TE_K, pd, pq, id1, iq1), dq.magnitude(o, pd, pq)
 
+    # flux reference and the cost's flux weight (per step)
+    psir, inv_psir = flux_reference(t, o, k, tref)
+    wn = flux_weight(t, o, k, tref)
+
     # candidate row: threshold (s1-s3), condition and sector (s2, s3)
     row = np.zeros(n, np.intp)
     hold = np.zeros(n, bool)
@@ -110,7 +141,7 @@ def _step(t: TwoLevelTables, x: np.ndarray) -> np.ndarray:
                 sec = sec >> 1
                 cnd = np.where(o.gt(d_t, zf), 0, 1)
             else:
-                d_psi = o.sub(k.PSI_REF_WB, mag)
+                d_psi = o.sub(psir, mag)
                 cnd = np.where(o.gt(d_t, zf), 0, 2) + np.where(o.gt(d_psi, zf), 0, 1)
             row = cnd * t.n_sectors + sec
             sector = np.where(hold, 0, sec + 1).astype(np.uint16)
@@ -131,12 +162,14 @@ def _step(t: TwoLevelTables, x: np.ndarray) -> np.ndarray:
         active = j < row_n
         v = rows[row, j]
         te1, m1 = predict(v)
-        # g = ((Te+ - T*)/T_N)^2 + ((|psi+| - psi*)/psi*)^2
+        # g = ((Te+ - T*)/T_N)^2 + (w (|psi+| - psi*)/psi*)^2, w = 1 (rated) or T_n/T_N (reference)
         e_t = o.sub(te1, tref)
         e_t = o.mul(e_t, k.INV_TN)
         g = o.mul(e_t, e_t)
-        e_p = o.sub(m1, k.PSI_REF_WB)
-        e_p = o.mul(e_p, k.INV_PSI_REF)
+        e_p = o.sub(m1, psir)
+        e_p = o.mul(e_p, inv_psir)
+        if wn is not None:
+            e_p = o.mul(e_p, wn)
         e_p = o.mul(e_p, e_p)
         g = o.add(g, e_p)
         take = active & ((j == 0) | o.lt(g, best))
