@@ -6,18 +6,20 @@ plant integration with the neutral point) runs in C (``csrc/ttype_sim.c`` +
 generated controller step, compiled into one cffi library); the shared
 driver (:mod:`codegen.simulator.driver`) calls ``ttype_sim_run`` once per
 chunk of periods and this module wraps the recorded arrays into a
-:class:`Trace`.  The plant, PI and applied-decision state is carried across
-chunks in a ``ttype_sim_state_t``, so a chunked run equals one long run bit
-for bit.
+:class:`Trace`.  The plant, PI, sensor and decision-queue state is carried
+across chunks in a ``ttype_sim_state_t``, so a chunked run equals one long
+run bit for bit.  The plant is the ``[plant]`` section's (actuation delay,
+parameter overrides, inverter and sensor non-idealities; every default the
+ideal plant of the controller's model).
 
 The simulator's parameter, state and trace structs are the field lists
 below (after the shared ones of :mod:`codegen.simulator.records`): the
 generated ``sim_api.h``, the cffi cdef and :class:`Trace` derive from them.
 
-Timing (mpdtc-three-level.md: the controller always uses one-step delay
-compensation): the decision computed at t_k is applied during
-[t_k+1, t_k+2); before the first period the inverter holds OOO.  Details:
-``csrc/ttype_sim.c``.  Plant model and the V_o sign convention
+Timing: the decision computed at t_k is applied during [t_k+d, t_k+d+1),
+d the plant's actuation delay (the MPDTC step always assumes d = 1; the
+default d follows ``controller.delay_compensation``); before the first
+decisions the inverter holds OOO.  Details: ``csrc/ttype_sim.c``.  Plant model and the V_o sign convention
 (dV_o/dt = i_o/(2C), i_o = sum (1-|S_x|) i_x): ``csrc/ttype_plant.h``.
 """
 from __future__ import annotations
@@ -40,6 +42,7 @@ from codegen.simulator.driver import (
     TraceBase,
     fill_common_params,
     motor_inputs,
+    plant_udc_v,
     run_chunked,
     trace_class,
 )
@@ -58,19 +61,27 @@ PARAMS = SimStruct("ttype_sim_params_t", "T-type simulator parameters", Record("
 
 STATE = SimStruct("ttype_sim_state_t", "T-type carried state", Record("ttype_sim_state", fields("""
     vo_v            f64   1      plant neutral-point voltage (u_c1 - u_c2)/2, V
-    applied_vector  i32   1      vector (0..62) applied in the current period
+    applied_vector  i32   1      the decision of period k-1: vector (0..62; 13 = OOO before the first)
     applied_t_n_s   f64   1      its T_N, s (as the controller gave it)
     applied_states  u16   N_SEG  its states per segment, 0..26
     applied_seg_s   f64   N_SEG  its segment durations, s (sum = dt_s)
+    prior_vector    i32   1      the decision of period k-2: vector (OOO before the first two)
+    prior_t_n_s     f64   1      its T_N, s
+    prior_states    u16   N_SEG  its states per segment, 0..26
+    prior_seg_s     f64   N_SEG  its segment durations, s
     last_state      i32   1      state at the end of the previous period (13 = OOO)
+    sampled_vo_v    f64   1      plant V_o at t_k - measurement_delay_s, V
 """, N_SEG=N_SEG)), base=SIM_STATE)
 
 TRACE = SimStruct("ttype_sim_trace_t", "T-type trace", Record("ttype_sim_trace", fields("""
     vo_v            f64   1      plant neutral-point voltage at t_k, V
+    vo_meas_v       f64   1      V_o as the controller sampled it (measurement delay), V
     t_n_s           f64   1      out.t_n_s (T_N of the decision), s, exact in every number format
     psi_ref_wb      f32   1      out.psi_ref_wb (the controller's flux reference), Wb
     vo_est_v        f32   1      out.vo_v (the controller's V_o), V
-    applied_vector  u16   1      vector applied during [t_k, t_k+1) (decision of k-1)
+    applied_vector  u16   1      vector applied during [t_k, t_k+1) (the decision of k-d)
+    prev_vector     u16   1      in.prev_vector as the controller saw it (the decision of k - max(d, 1))
+    t_n_prev_s      f64   1      in.t_n_prev_s before the format conversion, s
     leg_changes     u16   1      one-level leg changes of the applied period
     uab_v           f64   N_SEG  u_ab per applied segment (V_o at the segment start), V
     seg_s           f64   N_SEG  applied segment durations, s (0: skipped)
@@ -110,22 +121,23 @@ else:
         Per-period arrays (n,) are taken at the sample instant t_k = k*dt_s;
         plant quantities float64, controller outputs in their C types.
         ``vector``/``t_n_s`` are the decision of period k (applied during
-        [t_k+1, t_k+2)); ``applied_vector``, ``uab_v``, ``seg_s``, ``seg_states``
+        [t_k+d, t_k+d+1)); ``applied_vector``, ``uab_v``, ``seg_s``, ``seg_states``
         and ``leg_changes`` describe the period actually applied during
-        [t_k, t_k+1).  Per-segment arrays have shape (n, 7); zero-length
-        segments (``seg_s == 0``) were not applied.
+        [t_k, t_k+1); ``prev_vector``/``t_n_prev_s`` the step's inputs.
+        Per-segment arrays have shape (n, 7); zero-length segments
+        (``seg_s == 0``) were not applied.  ``udc_v`` is the plant's.
         """, scalars=("udc_v",), base=_TraceProperties)
 
 
 def params_from_model(ffi: Any, model: Model, substep_max_s: float | None = None) -> Any:
-    """A new ``ttype_sim_params_t *`` filled from the model.
+    """A new ``ttype_sim_params_t *`` filled from the model (the plant: :func:`fill_common_params`).
 
-    Udc and each capacitor C from ``model.inverter`` (``udc_v``, ``c_f``);
+    Udc and each capacitor C from ``model.inverter`` (``udc_v``, ``c_f``) unless ``[plant]`` overrides them;
     ``substep_max_s`` defaults to :data:`MAX_SUBSTEP_S`; ``speed_imposed``
     when ``scenario.speed_mode == "imposed"`` (T* is then the load torque).
     """
     p = fill_common_params(ffi.new(f"{PARAMS.ctype} *"), model)
-    p.c_f = model.inverter.c_f
+    p.c_f = model.plant.c_f if model.plant.c_f is not None else model.inverter.c_f
     p.substep_max_s = float(substep_max_s) if substep_max_s is not None else MAX_SUBSTEP_S
     return p
 
@@ -142,7 +154,7 @@ def run_closed_loop(ffi: Any, lib: Any, model: Model, progress: Callable[[float]
     params = params_from_model(ffi, model, substep_max_s)
     arrays = run_chunked(ffi, lib, SIM, model, params, progress, chunk,
                          initial_speed_rad_s=initial_speed_rpm * 2.0 * math.pi / 60.0)
-    return Trace(dt_s=float(model.controller.dt_s), udc_v=float(model.inverter.udc_v), **arrays)
+    return Trace(dt_s=float(model.controller.dt_s), udc_v=plant_udc_v(model), **arrays)
 
 
 def controller_inputs(trace: Any, model: Model, nf: NumberFormat | None = None) -> np.ndarray:
@@ -151,21 +163,17 @@ def controller_inputs(trace: Any, model: Model, nf: NumberFormat | None = None) 
     Input records in the step's number format ``nf`` (default: the config's, float32), for replaying
     through the Python reference and the generated C.  Every real field is one float64 value converted
     as the C loop's ``MPC_ENCODE_*`` does (float32: rounded once): u_c1 = 0.5*Udc + V_o, u_c2 = 0.5*Udc - V_o
-    (the same double expressions as ttype_sim.c); ``prev_vector`` is the
-    previous decision (13 = OOO at k = 0) and ``t_n_prev_s`` its T_N (0 at
-    k = 0).
+    (the same double expressions as ttype_sim.c, the plant's Udc and V_o as sampled);
+    ``prev_vector`` and ``t_n_prev_s`` the recorded inputs (the decision of k - max(d, 1); 13 = OOO
+    and 0 before the first decisions).
     """
-    udc = float(model.inverter.udc_v)
+    udc = plant_udc_v(model)
     layout = INPUT.bind(nf or number_format(model.controller.number_format))
     rec = motor_inputs(trace, model, layout)
-    rec["uc1_v"] = layout.encode("uc1_v", 0.5 * udc + trace.vo_v)
-    rec["uc2_v"] = layout.encode("uc2_v", 0.5 * udc - trace.vo_v)
-    prev = np.full(trace.n, OOO, dtype=np.uint16)
-    prev[1:] = trace.vector[:-1]
-    rec["prev_vector"] = prev
-    t_n_prev = np.zeros(trace.n, dtype=np.float64)
-    t_n_prev[1:] = trace.t_n_s[:-1]
-    rec["t_n_prev_s"] = layout.encode("t_n_prev_s", t_n_prev)
+    rec["uc1_v"] = layout.encode("uc1_v", 0.5 * udc + trace.vo_meas_v)
+    rec["uc2_v"] = layout.encode("uc2_v", 0.5 * udc - trace.vo_meas_v)
+    rec["prev_vector"] = trace.prev_vector
+    rec["t_n_prev_s"] = layout.encode("t_n_prev_s", trace.t_n_prev_s)
     return rec
 
 
@@ -184,7 +192,7 @@ def period_stepper(lib: Any, model: Model, *, substep_max_s: float | None = None
 
 def trace_from(arrays: dict[str, np.ndarray], model: Model) -> Any:
     """The :class:`Trace` of arrays from :meth:`PeriodStepper.result`."""
-    return Trace(dt_s=float(model.controller.dt_s), udc_v=float(model.inverter.udc_v), **arrays)
+    return Trace(dt_s=float(model.controller.dt_s), udc_v=plant_udc_v(model), **arrays)
 
 
 def trace_metrics(trace: Any, model: Model) -> dict[str, Any]:

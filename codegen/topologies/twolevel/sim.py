@@ -6,16 +6,20 @@ integration) runs in C (``csrc/twolevel_sim.c`` + ``csrc/twolevel_plant.c``
 compiled by the host build into one cffi library); the shared driver
 (:mod:`codegen.simulator.driver`) calls ``twolevel_sim_run`` once per chunk
 of periods and this module wraps the recorded arrays into a :class:`Trace`.
-The plant, PI and previous-switch state is carried across chunks in a
-``twolevel_sim_state_t``, so a chunked run equals one long run bit for bit.
+The plant, PI, sensor and decision-queue state is carried across chunks in
+a ``twolevel_sim_state_t``, so a chunked run equals one long run bit for
+bit.  The plant is the ``[plant]`` section's (actuation delay, parameter
+overrides, inverter and sensor non-idealities; every default the ideal
+plant of the controller's model).
 
 The simulator's parameter, state and trace structs are the field lists
 below (after the shared ones of :mod:`codegen.simulator.records`): the
 generated ``sim_api.h``, the cffi cdef and :class:`Trace` derive from them.
 
 Specification: docs/simulation.md ("Plant", "Sampling",
-"Timing", "Fast") and docs/algorithms.md (two-level MPTC) ("Parameters and
-scenarios").  Timing details: ``csrc/twolevel_sim.c``.
+"Timing", "Inverter non-idealities", "Sensors", "Fast") and
+docs/algorithms.md (two-level MPTC) ("Parameters and scenarios").  Timing
+details: ``csrc/twolevel_sim.c``.
 """
 from __future__ import annotations
 
@@ -36,6 +40,7 @@ from codegen.simulator.driver import (
     default_substeps,
     fill_common_params,
     motor_inputs,
+    plant_udc_v,
     run_chunked,
     trace_class,
 )
@@ -44,16 +49,19 @@ from codegen.topologies.twolevel.records import INPUT
 
 PARAMS = SimStruct("twolevel_sim_params_t", "two-level simulator parameters", Record("twolevel_sim_params", fields("""
     substeps            i32   1  RK4 sub-steps per period (dt_s/substeps <= 1 us)
-    delay_compensation  i32   1  0: decision of k applied in period k; 1: in period k+1
+    delay_compensation  i32   1  controller.delay_compensation (what the controller assumes; not read: the plant's timing is common.delay_periods)
 """)), base=SIM_PARAMS)
 
 STATE = SimStruct("twolevel_sim_state_t", "two-level carried state", Record("twolevel_sim_state", fields("""
-    prev_sw  i32   1  decision of the previous period, Sa*4+Sb*2+Sc
+    prev_sw   i32   1  decision of period k-1, Sa*4+Sb*2+Sc (000 before the first)
+    prior_sw  i32   1  decision of period k-2 (000 before the first two)
+    held_sw   i32   1  state the inverter held during [t_k-1, t_k) (000 before the first period)
 """)), base=SIM_STATE)
 
 TRACE = SimStruct("twolevel_sim_trace_t", "two-level trace", Record("twolevel_sim_trace", fields("""
     sw          u16   1  controller decision out.sw, Sa*4+Sb*2+Sc
-    applied_sw  u16   1  state the inverter holds during [t_k, t_k+1)
+    applied_sw  u16   1  state the inverter holds during [t_k, t_k+1) (the decision of k-d)
+    prev_sw     u16   1  in.prev_sw as the controller saw it (the decision of k - max(d, 1))
 """)), base=SIM_TRACE, pointers=True)
 
 SIM = api.SimApi("twolevel", PARAMS, STATE, TRACE, Path(__file__).resolve().parent / "csrc", {
@@ -72,13 +80,14 @@ else:
         switching state is applied.  Plant quantities are float64; controller
         outputs keep their C types (float32 estimates, uint16 decisions).
         ``sw`` is the controller's decision at k; ``applied_sw`` the state the
-        inverter holds during [t_k, t_k+1) (equal to ``sw`` without delay
-        compensation, the previous decision with it).
+        inverter holds during [t_k, t_k+1), the decision of k-d (d the plant's
+        actuation delay: equal to ``sw`` for d = 0); ``prev_sw`` the step's
+        ``prev_sw`` input.  ``*_meas_*``: what the controller saw (sensors).
         """)
 
 
 def params_from_model(ffi: Any, model: Model, substeps: int | None = None) -> Any:
-    """A new ``twolevel_sim_params_t *`` filled from the model.
+    """A new ``twolevel_sim_params_t *`` filled from the model (the plant: :func:`fill_common_params`).
 
     ``substeps`` defaults to :func:`default_substeps` (sub-step <= 1 us).
     ``speed_imposed`` is set when ``scenario.speed_mode == "imposed"`` (the
@@ -112,16 +121,14 @@ def controller_inputs(trace: Any, model: Model, nf: NumberFormat | None = None) 
 
     Returns input records in the step's number format ``nf`` (default: the config's, float32): the
     states a closed-loop run fed to the step, for replaying through the Python reference and the
-    generated C (numerics.md "Test states" (a)).  Every real field is the float64 sample converted
-    as the C loop's ``MPC_ENCODE_*`` does (float32: rounded once);
-    ``prev_sw`` is the previous decision (0 before the first period).
+    generated C.  Every real field is the float64 sample the controller saw converted as the C
+    loop's ``MPC_ENCODE_*`` does (float32: rounded once); ``udc_v`` is the plant's; ``prev_sw``
+    the recorded input (the decision of k - max(d, 1), 0 before the first decisions).
     """
     layout = INPUT.bind(nf or number_format(model.controller.number_format))
     rec = motor_inputs(trace, model, layout)
-    rec["udc_v"] = layout.encode("udc_v", float(model.inverter.udc_v))
-    prev_sw = np.zeros(trace.n, dtype=np.uint16)
-    prev_sw[1:] = trace.sw[:-1]
-    rec["prev_sw"] = prev_sw
+    rec["udc_v"] = layout.encode("udc_v", plant_udc_v(model))
+    rec["prev_sw"] = trace.prev_sw
     return rec
 
 

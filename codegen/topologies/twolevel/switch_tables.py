@@ -25,10 +25,10 @@ import numpy as np
 from codegen.errors import ConfigError
 from codegen.kernels.consts import Constants
 from codegen.kernels.sector import sector12
-from codegen.model import Model
+from codegen.model import Model, Plant
 from codegen.topologies.twolevel import tables_file
 from codegen.topologies.twolevel.derive import SwitchTable, TwoLevelTables, derive_two_level
-from codegen.topologies.twolevel.reference import step_batch
+from codegen.topologies.twolevel.reference import flux_reference, step_batch
 from codegen.topologies.twolevel.utilisation import count_utilisation, derive_table, published_tables
 
 #: Fewest active-vector choices in a cell for its derived set to be used.
@@ -44,7 +44,7 @@ def training_model(model: Model) -> Model:
     """The conventional variant whose closed-loop run is the training data (host target, no tables file)."""
     return model.with_controller(strategy="conventional", tables="published", tables_file=None,
                                  number_format="float32", fixed_q=None).replace(
-        target="host")
+        target="host", plant=Plant())
 
 
 def utilisation_counts(model: Model, progress: Callable[[float], None] | None = None) -> dict[str, np.ndarray]:
@@ -61,7 +61,8 @@ def utilisation_counts(model: Model, progress: Callable[[float], None] | None = 
     k = Constants(t.consts)
     ops = t.nf.ops
     d_t = states["torque_ref_nm"] - out["te_est_nm"]
-    d_psi = k.PSI_REF_WB - out["psi_est_wb"]
+    psir, _ = flux_reference(t, ops, k, states["torque_ref_nm"])
+    d_psi = psir - out["psi_est_wb"]
     mask = (np.abs(d_t) > k.EPS_T_NM) & (out["fault"] == 0)
     sec12 = sector12(ops, out["psi_alpha_wb"], out["psi_beta_wb"], k.TAN30, k.TAN60).astype(np.intp)
     vec = out["vector"].astype(np.intp)

@@ -87,11 +87,32 @@ int ttype_plant_advance(ttype_plant_state_t *s, const ttype_sim_params_t *p, int
  * constant at segment resolution (V_o moves by mV within a segment).
  * Returns 0, or -1 (state untouched, uab_v untouched) if any states[i] is
  * outside 0..26, any seg_s[i] is negative or non-finite, or substep_max_s is
- * not a positive finite number.
+ * not a positive finite number.  Dead time applies between its segments
+ * only (no state before the period: ttype_plant_advance_period with
+ * from_state -1), device drops throughout.
  */
 int ttype_plant_advance_segments(ttype_plant_state_t *s, const ttype_sim_params_t *p,
                                  const uint16_t states[7], const double seg_s[7],
                                  double load_nm, double uab_v[7]);
+
+/*
+ * One control period of seven segments (as ttype_plant_advance_segments)
+ * with the inverter non-idealities of p->common (sim_inverter.h): every leg
+ * edge -- from from_state (held before the period; < 0: as if states[0])
+ * to the first non-empty segment, and between consecutive non-empty
+ * segments -- spends the first min(dead_time_s, segment) of the new segment
+ * at the level its phase current at the edge dictates; device drops
+ * (device_drop_v per conducting device: 1 at P and N, 2 at O) against the
+ * stage currents throughout.  t_snap_s >= 0: the plant state at that offset
+ * into the period goes to *snap (its angle wrapped; an interval is split
+ * there); -1: none.  Each piece takes ceil(length/substep_max_s) equal RK4
+ * sub-steps.  With dead time and drops off, no snapshot, this equals
+ * ttype_plant_advance_segments bit for bit.  Returns 0 or -1 (as
+ * ttype_plant_advance_segments; also for from_state > 26).
+ */
+int ttype_plant_advance_period(ttype_plant_state_t *s, const ttype_sim_params_t *p, int from_state,
+                               const uint16_t states[7], const double seg_s[7], double load_nm,
+                               double uab_v[7], double t_snap_s, ttype_plant_state_t *snap);
 
 /* Leg levels (Sa, Sb, Sc) in {-1, 0, +1} of state 0..26; returns -1 otherwise. */
 int ttype_plant_levels(int state, int levels[3]);

@@ -10,28 +10,38 @@
  * generated sim_api.h (ttype_sim_params_t, _state_t, _trace_t from
  * codegen/topologies/ttype/sim.py).
  *
- * Timing: the three-level controller always uses one-step delay
- * compensation: the decision computed from the samples at t_k is applied
- * during [t_k+1, t_k+2).  The state carries the decision to be applied in
- * the current period ("applied" below); before the first period that is
- * OOO (vector 13, states all 13, seg_s = {dt_s, 0, ..., 0}, T_N = 0).
+ * Timing: the decision computed from the samples at t_k is applied during
+ * [t_k+d, t_k+d+1), d = the plant's actuation delay common.delay_periods
+ * (0, 1, 2), whatever the controller assumes (the MPDTC step always
+ * compensates one period).  The state carries a queue of the last two
+ * decisions: "applied" = the decision of k-1, "prior" = that of k-2; before
+ * the first decisions both are OOO (vector 13, states all 13, seg_s =
+ * {dt_s, 0, ..., 0}, T_N = 0).
  *
  * One period k (k = 0 .. n-1 over all chunks, t_k = k*dt_s):
- *  1.-3. imposed speed, sampling, torque reference T*(k) (sim_period.h);
- *     also V_o, u_c1 = 0.5*Udc + V_o, u_c2 = 0.5*Udc - V_o (double).
- *  4. Controller input (every field cast to float): ia_a, ib_a, theta_e_rad,
- *     omega_e_rad_s, uc1_v, uc2_v, torque_ref_nm, prev_vector = the vector
- *     applied during [t_k, t_k+1) (the decision of k-1; 13 = OOO at k = 0),
- *     t_n_prev_s = its T_N (0 at k = 0).  MPC_STEP(&in, &out).
- *  5. Record period k: sample-instant values, the decision, and the
- *     waveform of the applied period (its 7 segments).
+ *  1.-3. imposed speed, sampling (through the sensors), torque reference
+ *     T*(k) (sim_period.h); also V_o as sampled (at t_k - measurement_delay_s),
+ *     u_c1 = 0.5*Udc + V_o, u_c2 = 0.5*Udc - V_o (double, the plant's Udc).
+ *  4. Controller input (every field in the step's number format): ia_a,
+ *     ib_a, theta_e_rad, omega_e_rad_s, uc1_v, uc2_v, torque_ref_nm,
+ *     prev_vector = the vector applied during [t_k, t_k+1), the decision of
+ *     k-d (for d = 0, whose decision acts at once: the one held at the
+ *     sample instant, of k-1; 13 = OOO before the first decisions),
+ *     t_n_prev_s = its T_N (0 for OOO).  MPC_STEP(&in, &out).
+ *  5. Record period k: sample-instant values, the decision, the controller's
+ *     prev_vector / t_n_prev_s, and the waveform of the applied period (its 7
+ *     segments).
  *  6. Check the decision: vector <= 62, states[i] <= 26, seg_s[i] finite and
- *     >= 0, |sum seg_s - dt_s| <= 1e-4*dt_s.  It is stored (for period k+1)
- *     in double with the last non-empty segment set to dt_s minus the sum of
- *     the others, so that the plant's period is dt_s (the float32 sum is
- *     off by ~1e-7 relative).
- *  7. ttype_plant_advance_segments over the applied 7 segments with
- *     substep_max_s and load_nm[k].
+ *     >= 0, |sum seg_s - dt_s| <= 1e-4*dt_s.  It is stored in double with
+ *     the last non-empty segment set to dt_s minus the sum of the others, so
+ *     that the plant's period is dt_s (the float32 sum is off by ~1e-7
+ *     relative).  The period applied during [t_k, t_k+1) is the decision of
+ *     k-d: this one (d = 0), "applied" (d = 1) or "prior" (d = 2).
+ *  7. ttype_plant_advance_period over the applied 7 segments from the state
+ *     at the end of the previous period (dead time at every leg edge),
+ *     substep_max_s and load_nm[k], keeping the plant at
+ *     t_k+1 - measurement_delay_s for the next period's samples.
+ *  Commit: prior := applied, applied := the decision of k.
  *
  * Leg-level changes of period k: sum over the legs and over consecutive
  * NON-EMPTY applied segments of |S_x(i) - S_x(i-1)| (a P<->N jump counts
@@ -75,30 +85,70 @@ int ttype_sim_init(const ttype_sim_params_t *p, ttype_sim_state_t *state)
     sim_period_reset(&state->common);
     state->applied_vector = TTYPE_SIM_OOO;
     state->applied_t_n_s = 0.0;
+    state->prior_vector = TTYPE_SIM_OOO;
+    state->prior_t_n_s = 0.0;
     for (i = 0; i < TTYPE_PLANT_N_SEG; ++i) {
         state->applied_states[i] = TTYPE_SIM_OOO;
         state->applied_seg_s[i] = 0.0;
+        state->prior_states[i] = TTYPE_SIM_OOO;
+        state->prior_seg_s[i] = 0.0;
     }
     state->applied_seg_s[0] = p->common.dt_s;
+    state->prior_seg_s[0] = p->common.dt_s;
     state->last_state = TTYPE_SIM_OOO;
+    state->sampled_vo_v = 0.0;
     return 0;
 }
 
-/* The carried applied period is valid (states 0..26, durations finite, >= 0). */
-static int state_valid(const ttype_sim_state_t *state)
+/* One decision of the queue: vector, T_N, and the 7 segments in double. */
+typedef struct {
+    int32_t vector;
+    double t_n_s;
+    uint16_t states[TTYPE_PLANT_N_SEG];
+    double seg_s[TTYPE_PLANT_N_SEG];
+} decision_t;
+
+/* A carried decision is valid (vector 0..62, states 0..26, durations finite, >= 0). */
+static int decision_valid(int32_t vector, const uint16_t states[7], const double seg_s[7])
 {
     int i;
-    if (state->applied_vector < 0 || state->applied_vector >= TTYPE_SIM_N_VECTORS
-        || state->last_state < 0 || state->last_state >= TTYPE_PLANT_N_STATES) {
+    if (vector < 0 || vector >= TTYPE_SIM_N_VECTORS) {
         return 0;
     }
     for (i = 0; i < TTYPE_PLANT_N_SEG; ++i) {
-        if (state->applied_states[i] >= TTYPE_PLANT_N_STATES || !isfinite(state->applied_seg_s[i])
-            || state->applied_seg_s[i] < 0.0) {
+        if (states[i] >= TTYPE_PLANT_N_STATES || !isfinite(seg_s[i]) || seg_s[i] < 0.0) {
             return 0;
         }
     }
     return 1;
+}
+
+/* The carried queue and last state are valid. */
+static int state_valid(const ttype_sim_state_t *state)
+{
+    return decision_valid(state->applied_vector, state->applied_states, state->applied_seg_s)
+           && decision_valid(state->prior_vector, state->prior_states, state->prior_seg_s)
+           && state->last_state >= 0 && state->last_state < TTYPE_PLANT_N_STATES;
+}
+
+/* The decision of k-1 (slot 0, "applied") or k-2 (slot 1, "prior"). */
+static void queued(const ttype_sim_state_t *state, int slot, decision_t *d)
+{
+    int i;
+    d->vector = slot == 0 ? state->applied_vector : state->prior_vector;
+    d->t_n_s = slot == 0 ? state->applied_t_n_s : state->prior_t_n_s;
+    for (i = 0; i < TTYPE_PLANT_N_SEG; ++i) {
+        d->states[i] = slot == 0 ? state->applied_states[i] : state->prior_states[i];
+        d->seg_s[i] = slot == 0 ? state->applied_seg_s[i] : state->prior_seg_s[i];
+    }
+}
+
+/* The controller's prev_vector / t_n_prev_s: the decision of k-d applied during [t_k, t_k+1),
+ * for d = 0 the one held at the sample instant (of k-1). */
+static void controller_prev(const ttype_sim_params_t *p, const ttype_sim_state_t *state,
+                            decision_t *d)
+{
+    queued(state, p->common.delay_periods >= 2 ? 1 : 0, d);
 }
 
 /* Sum of |S_x(to) - S_x(from)| over the three legs. */
@@ -122,13 +172,20 @@ static int in_range(long v, long n)
     return v >= 0 && v < n;
 }
 
-/* Validate the decision and convert it to the double segment times of the
- * next period (step 6 above).  Returns 0 or -1. */
-static int take_decision(const ttype_sim_params_t *p, const mpc_output_t *out,
-                         uint16_t st[7], double seg[7])
+/* Validate the decision and convert it to double segment times (step 6
+ * above) into *dec.  Returns 0 or -1. */
+static int take_decision(const ttype_sim_params_t *p, const mpc_output_t *out, decision_t *dec)
 {
+    uint16_t *st = dec->states;
+    double *seg = dec->seg_s;
     double sum = 0.0, rest = 0.0;
     int i, last = -1;
+    dec->vector = (int32_t)out->vector;
+    dec->t_n_s = (double)MPC_DECODE_t_n_s(out->t_n_s);
+    for (i = 0; i < TTYPE_PLANT_N_SEG; ++i) {
+        st[i] = TTYPE_SIM_OOO;
+        seg[i] = 0.0;
+    }
     if (!in_range((long)out->vector, TTYPE_SIM_N_VECTORS)) {
         return -1;
     }
@@ -156,17 +213,17 @@ static int take_decision(const ttype_sim_params_t *p, const mpc_output_t *out,
     return (seg[last] > 0.0) ? 0 : -1;
 }
 
-/* Leg-level changes of the applied period (non-empty segments only); *last
- * receives the state of its last non-empty segment. */
-static unsigned applied_changes(const ttype_sim_state_t *state, int *last)
+/* Leg-level changes of the applied period a (non-empty segments only) after the state `from`;
+ * *last receives the state of its last non-empty segment. */
+static unsigned applied_changes(const decision_t *a, int from, int *last)
 {
     unsigned changes = 0u;
-    int i, prev = state->last_state;
+    int i, prev = from;
     *last = prev;
     for (i = 0; i < TTYPE_PLANT_N_SEG; ++i) {
-        if (state->applied_seg_s[i] > 0.0) {
-            changes += leg_steps(prev, (int)state->applied_states[i]);
-            prev = (int)state->applied_states[i];
+        if (a->seg_s[i] > 0.0) {
+            changes += leg_steps(prev, (int)a->states[i]);
+            prev = (int)a->states[i];
             *last = prev;
         }
     }
@@ -180,21 +237,33 @@ static void plant_load(const ttype_sim_state_t *state, ttype_plant_state_t *x)
     x->vo_v = state->vo_v;
 }
 
+/* V_o as the controller samples it: at t_k - measurement_delay_s (the kept value), else at t_k. */
+static double sampled_vo(const ttype_sim_params_t *p, const ttype_sim_state_t *state,
+                         const ttype_plant_state_t *x)
+{
+    return sim_period_delayed(&p->common, &state->common) ? state->sampled_vo_v : x->vo_v;
+}
+
 /* Steps 1.-4. (inputs) of the period at state->common.k; x: the plant (step 1 may set its speed). */
 static void period_input(const ttype_sim_params_t *p, const ttype_sim_state_t *state,
                          ttype_plant_state_t *x, double w_ref, double load, sim_sample_t *v,
                          mpc_input_t *in)
 {
+    decision_t prev;
+    double vo;
+
     /* 1.-3. */
     sim_period_sample(&p->common, &state->common, &x->motor, w_ref, load, v);
 
-    /* 4. controller inputs, cast to float */
+    /* 4. controller inputs in the step's number format */
+    vo = sampled_vo(p, state, x);
+    controller_prev(p, state, &prev);
     memset(in, 0, sizeof *in);
     SIM_PERIOD_MOTOR_INPUTS(*in, *v);
-    in->uc1_v = MPC_ENCODE_uc1_v(0.5 * p->common.udc_v + x->vo_v);
-    in->uc2_v = MPC_ENCODE_uc2_v(0.5 * p->common.udc_v - x->vo_v);
-    in->prev_vector = (uint16_t)state->applied_vector;
-    in->t_n_prev_s = MPC_ENCODE_t_n_prev_s(state->applied_t_n_s);
+    in->uc1_v = MPC_ENCODE_uc1_v(0.5 * p->common.udc_v + vo);
+    in->uc2_v = MPC_ENCODE_uc2_v(0.5 * p->common.udc_v - vo);
+    in->prev_vector = (uint16_t)prev.vector;
+    in->t_n_prev_s = MPC_ENCODE_t_n_prev_s(prev.t_n_s);
 }
 
 /* Steps 5.-7. and the commit of period k (trace entry j) with the decision `out`. */
@@ -202,34 +271,47 @@ static int period_finish(const ttype_sim_params_t *p, ttype_sim_state_t *state,
                          ttype_plant_state_t *x, const sim_sample_t *v, const mpc_output_t *out,
                          const ttype_sim_trace_t *tr, long j)
 {
-    double uab[7], next_seg[7];
-    uint16_t next_st[7];
+    const int d = p->common.delay_periods;
+    const double t_snap = sim_period_snap_offset(&p->common);
+    double uab[7] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+    decision_t dec, cur, prev;
+    ttype_plant_state_t snap;
     unsigned changes;
     int i, last, bad;
 
-    changes = applied_changes(state, &last);
+    /* 6. check the decision; the period applied now is the decision of k-d */
+    bad = take_decision(p, out, &dec);
+    if (d == 0) {
+        cur = dec;
+    } else {
+        queued(state, d - 1, &cur);
+    }
+    controller_prev(p, state, &prev);
+    changes = applied_changes(&cur, state->last_state, &last);
 
     /* 5. record the sample instant, the decision, the applied period */
     sim_period_record(&tr->common, j, &p->common, &state->common, &x->motor, v, out->vector,
                       out->n_eval, out->fault, (float)MPC_DECODE_te_est_nm(out->te_est_nm),
                       (float)MPC_DECODE_psi_est_wb(out->psi_est_wb));
     if (tr->vo_v != NULL) tr->vo_v[j] = x->vo_v;
+    if (tr->vo_meas_v != NULL) tr->vo_meas_v[j] = sampled_vo(p, state, x);
     if (tr->t_n_s != NULL) tr->t_n_s[j] = (float)MPC_DECODE_t_n_s(out->t_n_s);
     if (tr->psi_ref_wb != NULL) tr->psi_ref_wb[j] = (float)MPC_DECODE_psi_ref_wb(out->psi_ref_wb);
     if (tr->vo_est_v != NULL) tr->vo_est_v[j] = (float)MPC_DECODE_vo_v(out->vo_v);
-    if (tr->applied_vector != NULL) tr->applied_vector[j] = (uint16_t)state->applied_vector;
+    if (tr->applied_vector != NULL) tr->applied_vector[j] = (uint16_t)cur.vector;
+    if (tr->prev_vector != NULL) tr->prev_vector[j] = (uint16_t)prev.vector;
+    if (tr->t_n_prev_s != NULL) tr->t_n_prev_s[j] = prev.t_n_s;
     if (tr->leg_changes != NULL) tr->leg_changes[j] = (uint16_t)changes;
     for (i = 0; i < TTYPE_PLANT_N_SEG; ++i) {
-        if (tr->seg_s != NULL) tr->seg_s[7 * j + i] = state->applied_seg_s[i];
-        if (tr->seg_states != NULL) tr->seg_states[7 * j + i] = state->applied_states[i];
+        if (tr->seg_s != NULL) tr->seg_s[7 * j + i] = cur.seg_s[i];
+        if (tr->seg_states != NULL) tr->seg_states[7 * j + i] = cur.states[i];
     }
 
-    /* 6. check the decision */
-    bad = take_decision(p, out, next_st, next_seg);
-
-    /* 7. integrate the applied period over [t_k, t_k+1) */
-    (void)ttype_plant_advance_segments(x, p, state->applied_states, state->applied_seg_s, v->load,
-                                       uab);
+    /* 7. integrate the applied period over [t_k, t_k+1) (not an invalid decision of d = 0) */
+    if (!(bad != 0 && d == 0)) {
+        (void)ttype_plant_advance_period(x, p, state->last_state, cur.states, cur.seg_s, v->load,
+                                         uab, t_snap, &snap);
+    }
     if (tr->uab_v != NULL) {
         for (i = 0; i < TTYPE_PLANT_N_SEG; ++i) {
             tr->uab_v[7 * j + i] = uab[i];
@@ -242,16 +324,23 @@ static int period_finish(const ttype_sim_params_t *p, ttype_sim_state_t *state,
         return -2;
     }
 
-    /* commit period k */
+    /* commit period k: the queue moves on */
     state->last_state = last;
-    state->applied_vector = (int32_t)out->vector;
-    state->applied_t_n_s = (double)MPC_DECODE_t_n_s(out->t_n_s);
+    state->prior_vector = state->applied_vector;
+    state->prior_t_n_s = state->applied_t_n_s;
+    state->applied_vector = dec.vector;
+    state->applied_t_n_s = dec.t_n_s;
     for (i = 0; i < TTYPE_PLANT_N_SEG; ++i) {
-        state->applied_states[i] = next_st[i];
-        state->applied_seg_s[i] = next_seg[i];
+        state->prior_states[i] = state->applied_states[i];
+        state->prior_seg_s[i] = state->applied_seg_s[i];
+        state->applied_states[i] = dec.states[i];
+        state->applied_seg_s[i] = dec.seg_s[i];
     }
     state->vo_v = x->vo_v;
-    sim_period_commit(&state->common, &x->motor, v->integral);
+    if (t_snap >= 0.0) {
+        state->sampled_vo_v = snap.vo_v;
+    }
+    sim_period_commit(&p->common, &state->common, &x->motor, t_snap >= 0.0 ? &snap.motor : NULL, v);
     return 0;
 }
 

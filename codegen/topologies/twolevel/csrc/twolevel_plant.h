@@ -38,6 +38,8 @@
  * inverter holds switching state sw = Sa*4 + Sb*2 + Sc (1 = upper switch on)
  * and the load torque is load_nm (N*m, opposing positive speed as T_L in
  * J*dw/dt = Te - T_L - B*w).  substeps >= 1 RK4 sub-steps of dt_s/substeps.
+ * With p->device_drop_v > 0 each leg's voltage drops that much against its
+ * phase current (sim_inverter.h); no dead time (no edge inside).
  * p->speed_imposed != 0: omega_m stays as set (load machine holds speed), J,
  * B and load_nm are then unused.
  * Returns 0, or -1 (state untouched) if sw is not 0..7, substeps < 1 or
@@ -45,6 +47,25 @@
  */
 int twolevel_plant_advance(pmsm_state_t *s, const sim_params_t *p, int sw, double load_nm,
                            double dt_s, int substeps);
+
+/*
+ * One control period [t_k, t_k + dt_s) in which the inverter goes from
+ * from_sw (held before t_k) to sw (both 0..7): the legs that change spend
+ * p->dead_time_s at the level their current at t_k dictates
+ * (sim_inverter.h), then sw for the rest of the period; every interval with
+ * p->device_drop_v's drops against the stage currents.  RK4 sub-steps of at
+ * most dt_s/substeps (exactly `substeps` over a whole period at one state).
+ * t_snap_s >= 0: the plant state at that offset into the period goes to
+ * *snap (the measurement-delay sample of the next period; an interval is
+ * split there); -1: none.  With dead time and drops off and no snapshot
+ * this is twolevel_plant_advance(s, p, sw, load_nm, dt_s, substeps), bit
+ * for bit.  Returns 0, or -1 (state untouched) for a bad state or substeps.
+ */
+int twolevel_plant_advance_period(pmsm_state_t *s, const sim_params_t *p, int from_sw, int sw,
+                                  double load_nm, int substeps, double t_snap_s, pmsm_state_t *snap);
+
+/* Leg levels (Sa, Sb, Sc) in {0, 1} of switching state sw = Sa*4 + Sb*2 + Sc. */
+void twolevel_plant_levels(int sw, int lv[3]);
 
 /* Stationary-frame voltage of switching state sw (0..7), V; (0,0) otherwise. */
 void twolevel_plant_voltage_ab(const sim_params_t *p, int sw, double *u_alpha_v, double *u_beta_v);

@@ -4,27 +4,36 @@
  * mpc_binding.h), with the shared period steps of sim_period.h.
  *
  * Specification: docs/simulation.md "Plant" (sampling at the
- * start of each period, timing of delay_compensation, speed loop) and
+ * start of each period, the plant's actuation delay, speed loop) and
  * docs/algorithms.md (two-level MPTC) "Parameters and scenarios".  The API and its
  * structs: the generated sim_api.h (twolevel_sim_params_t, _state_t,
  * _trace_t from codegen/topologies/twolevel/sim.py).
  *
- * One period k (k = 0 .. n-1 over all chunks, t_k = k*dt_s):
- *  1.-3. imposed speed, sampling, torque reference T*(k) (sim_period.h).
- *  4. Controller input (every field cast to float): ia_a, ib_a, theta_e_rad,
- *     omega_e_rad_s, udc_v, torque_ref_nm, prev_sw = the decision of period
- *     k-1 (0 = 000 before the first period).  MPC_STEP(&in, &out).
- *  5. Record period k in the trace (sample-instant values, out.sw, and the
- *     state applied during [t_k, t_k+1)).
- *  6. Switching state applied during [t_k, t_k+1):
- *       delay_compensation == 0: out.sw (decision of k acts in the same period)
- *       delay_compensation != 0: prev_sw (decision of k-1; the decision of k
- *       acts during [t_k+1, t_k+2)).  In both cases prev_sw, as given to the
- *       step, is the state the inverter holds at the sample instant.
- *     A decision outside 0..7 stops the run (-3).
- *  7. twolevel_plant_advance over dt_s with `substeps` RK4 sub-steps and the
- *     load torque load_nm[k] (ignored when the speed is imposed).
- * Initial state: the shared one (sim_period_reset) and prev_sw 0 (000).
+ * One period k (k = 0 .. n-1 over all chunks, t_k = k*dt_s), d = the
+ * plant's actuation delay common.delay_periods (0, 1, 2):
+ *  1.-3. imposed speed, sampling (through the sensors), torque reference
+ *     T*(k) (sim_period.h).
+ *  4. Controller input (every field in the step's number format): ia_a,
+ *     ib_a, theta_e_rad, omega_e_rad_s, udc_v (the plant's), torque_ref_nm,
+ *     prev_sw = the state the inverter applies during [t_k, t_k+1): the
+ *     decision of k-d for d >= 1; for d = 0 (the decision of k acts at
+ *     once) the state held at the sample instant, the decision of k-1.
+ *     000 before the first decisions.  MPC_STEP(&in, &out).
+ *  5. Record period k in the trace (sample-instant values, out.sw, prev_sw
+ *     and the state applied during [t_k, t_k+1)).
+ *  6. Decision queue: the state applied during [t_k, t_k+1) is the
+ *     decision of k-d: out.sw (d = 0), prev_sw (d = 1, the decision of
+ *     k-1) or prior_sw (d = 2, of k-2).  The controller's
+ *     delay_compensation (what it assumes) does not enter.  A decision
+ *     outside 0..7 stops the run (-3).
+ *  7. twolevel_plant_advance_period from held_sw (the state of
+ *     [t_k-1, t_k): the dead time of the edges at t_k) to the applied state
+ *     over dt_s with `substeps` RK4 sub-steps and the load torque
+ *     load_nm[k] (ignored when the speed is imposed), keeping the plant at
+ *     t_k+1 - measurement_delay_s for the next period's samples.
+ *  Commit: held_sw := applied, prior_sw := prev_sw, prev_sw := out.sw.
+ * Initial state: the shared one (sim_period_reset) and prev_sw = prior_sw =
+ * held_sw = 0 (000).
  *
  * Period by period (the serial HIL's closed loop, where a board computes the
  * decision): twolevel_sim_hil_input gives the controller input of the next
@@ -54,13 +63,40 @@ int twolevel_sim_init(const twolevel_sim_params_t *p, twolevel_sim_state_t *stat
     }
     sim_period_reset(&state->common);
     state->prev_sw = 0;
+    state->prior_sw = 0;
+    state->held_sw = 0;
     return 0;
 }
 
-/* The carried decision is a switching state 0..7. */
+static int is_sw(int32_t sw)
+{
+    return sw >= 0 && sw <= 7;
+}
+
+/* The carried decisions and the held state are switching states 0..7. */
 static int state_valid(const twolevel_sim_state_t *state)
 {
-    return state->prev_sw >= 0 && state->prev_sw <= 7;
+    return is_sw(state->prev_sw) && is_sw(state->prior_sw) && is_sw(state->held_sw);
+}
+
+/* The controller's prev_sw: the state applied during [t_k, t_k+1) (the decision of k-d), or for
+ * d = 0 the state held at the sample instant (the decision of k-1). */
+static int controller_prev(const twolevel_sim_params_t *p, const twolevel_sim_state_t *state)
+{
+    return p->common.delay_periods >= 2 ? state->prior_sw : state->prev_sw;
+}
+
+/* The state applied during [t_k, t_k+1): the decision of k-d (step 6). */
+static int applied(const twolevel_sim_params_t *p, const twolevel_sim_state_t *state, int sw_dec)
+{
+    switch (p->common.delay_periods) {
+    case 0:
+        return sw_dec;
+    case 1:
+        return state->prev_sw;
+    default:
+        return state->prior_sw;
+    }
 }
 
 /* The plant at the sample instant of period state->common.k. */
@@ -81,7 +117,7 @@ static void period_input(const twolevel_sim_params_t *p, const twolevel_sim_stat
     memset(in, 0, sizeof *in);
     SIM_PERIOD_MOTOR_INPUTS(*in, *v);
     in->udc_v = MPC_ENCODE_udc_v(p->common.udc_v);
-    in->prev_sw = (uint16_t)state->prev_sw;
+    in->prev_sw = (uint16_t)controller_prev(p, state);
 }
 
 /* Steps 5.-7. and the commit of period k (trace entry j) with the decision `out`. */
@@ -90,8 +126,10 @@ static int period_finish(const twolevel_sim_params_t *p, twolevel_sim_state_t *s
                          const twolevel_sim_trace_t *tr, long j)
 {
     const int sw_dec = (int)out->sw;
-    /* 6. timing rule (plant-and-metrics.md "Timing") */
-    const int sw_apply = p->delay_compensation ? state->prev_sw : sw_dec;
+    /* 6. the decision queue: the decision of k-d acts now (docs/simulation.md "Timing") */
+    const int sw_apply = applied(p, state, sw_dec);
+    const double t_snap = sim_period_snap_offset(&p->common);
+    pmsm_state_t snap;
 
     /* 5. record the sample instant */
     sim_period_record(&tr->common, j, &p->common, &state->common, x, v, out->vector, out->n_eval,
@@ -99,19 +137,23 @@ static int period_finish(const twolevel_sim_params_t *p, twolevel_sim_state_t *s
                       (float)MPC_DECODE_psi_est_wb(out->psi_est_wb));
     if (tr->sw != NULL) tr->sw[j] = (uint16_t)out->sw;
     if (tr->applied_sw != NULL) tr->applied_sw[j] = (uint16_t)(sw_apply & 0xFFFF);
+    if (tr->prev_sw != NULL) tr->prev_sw[j] = (uint16_t)controller_prev(p, state);
 
-    if (sw_dec < 0 || sw_dec > 7) {
+    if (!is_sw(sw_dec)) {
         state->common.motor = *x;
         return -3;
     }
 
-    /* 7. integrate the plant over [t_k, t_k+1) */
-    (void)twolevel_plant_advance(x, &p->common, sw_apply, v->load, p->common.dt_s, p->substeps);
+    /* 7. integrate the plant over [t_k, t_k+1), from the state held before t_k */
+    (void)twolevel_plant_advance_period(x, &p->common, state->held_sw, sw_apply, v->load,
+                                        p->substeps, t_snap, &snap);
     if (!sim_period_finite(x)) {
         return -2; /* *state still holds the sample instant of period k */
     }
+    state->held_sw = sw_apply;
+    state->prior_sw = state->prev_sw;
     state->prev_sw = sw_dec;
-    sim_period_commit(&state->common, x, v->integral);
+    sim_period_commit(&p->common, &state->common, x, t_snap >= 0.0 ? &snap : NULL, v);
     return 0;
 }
 
