@@ -11,12 +11,22 @@ et al., Control Theory & Applications 40(10), 2023, eq. (7)-(10)):
   complement off, i.e. 2 switch changes, so f_ave = (leg state changes) /
   (3 legs * t): leg commutations per second per leg, as the spec words it.
 * ``Cal_ave = Cal / n``                                        seed eq. (10)
+* Ripple statistics of the error e = x - ref besides the RMSE: ``std`` (about
+  its mean), ``pp`` (peak to peak, max - min) and ``p1_p99`` (the span between
+  the 1st and the 99th percentile of e, linear interpolation between order
+  statistics: a peak-to-peak that ignores the 2 % most extreme samples, as a
+  bench's scope statistics do).
 * THD of i_a: FFT over an integer number of fundamental periods inside a
   steady window, ``THD = sqrt(sum_{h>=2} I_h^2) / I_1`` over the harmonics up
-  to 10 kHz (or fs/2, whichever is lower).
+  to 10 kHz (or fs/2, whichever is lower).  Two fundamentals: the measured one
+  (mean electrical speed of the plant over the window, ``THD_ia_percent``) and
+  the nominal one (the speed reference over the window, p * |n*| / 60,
+  ``THD_ia_nominal_percent``, what a bench analyser locked to the commanded
+  frequency reports).  Both state their window and harmonic range.
 
 Te and |psi_s| are the plant's (float64) values at the sample instants; T*
-is the torque reference given to the controller; psi* = controller.psi_ref_wb.
+is the torque reference given to the controller; psi* = controller.psi_ref_wb, or the MTPA flux
+of each sample's T* (controller.psi_ref = "mtpa").
 Everything is vectorised numpy; nothing loops over samples in Python.
 """
 from __future__ import annotations
@@ -35,6 +45,7 @@ __all__ = [
     "window_mask",
     "rmse",
     "ripple_stats",
+    "percentile_span",
     "amplitude_spectrum",
     "thd",
     "leg_commutations",
@@ -47,6 +58,8 @@ __all__ = [
     "RunWindows",
     "run_windows",
     "thd_ia",
+    "thd_ia_nominal",
+    "nominal_fundamental_hz",
     "steady_ripples",
     "SPEED_BAND_FRACTION",
     "SPEED_BAND_FLOOR",
@@ -231,7 +244,8 @@ def ripple_stats(x: Any, ref: Any, mask: Any = None) -> dict[str, float]:
 
     Returns ``rmse`` (seed eq. (7)-(8)), ``std`` (standard deviation of the
     error x - ref, i.e. the ripple about its mean offset), ``pp``
-    (peak-to-peak of the error) and ``mean`` (mean error), all NaN if empty.
+    (peak-to-peak of the error) and ``mean`` (mean error), all NaN if empty;
+    the percentile span is :func:`percentile_span`.
     """
     e = _error(x, ref, mask)
     if not e.size:
@@ -242,6 +256,17 @@ def ripple_stats(x: Any, ref: Any, mask: Any = None) -> dict[str, float]:
         "pp": float(np.ptp(e)),
         "mean": float(np.mean(e)),
     }
+
+
+def percentile_span(x: Any, ref: Any, mask: Any = None, lo: float = 1.0, hi: float = 99.0) -> float:
+    """The ``hi``-th minus the ``lo``-th percentile of the error x - ref over the masked samples (numpy's
+    linear interpolation between order statistics): the 1st-99th percentile span by default, a
+    peak-to-peak that ignores the most extreme 2 % of the samples.  NaN if empty."""
+    e = _error(x, ref, mask)
+    if not e.size:
+        return math.nan
+    p_lo, p_hi = np.percentile(e, [lo, hi])
+    return float(p_hi - p_lo)
 
 
 # ---------------------------------------------------------------------------
@@ -381,8 +406,9 @@ def fundamental_hz(trace: Any, model: Model, t0: float, t1: float) -> float:
 def ripple_summary(trace: Any, psi_ref: Any, run_mask: Any, rip_mask: Any) -> dict[str, float]:
     """Torque and flux ripple entries shared by the two- and three-level metrics.
 
-    RMSE of Te - T* and |psi_s| - psi* over ``run_mask``; std and pp over
-    ``rip_mask`` (see :func:`ripple_stats`).  Keys in report order.
+    RMSE of Te - T* and |psi_s| - psi* over ``run_mask``; std, pp and the
+    1st-99th percentile span over ``rip_mask`` (see :func:`ripple_stats`).
+    Keys in report order.
     """
     t_stats = ripple_stats(trace.te_nm, trace.torque_ref_nm, rip_mask)
     p_stats = ripple_stats(trace.psi_wb, psi_ref, rip_mask)
@@ -393,6 +419,8 @@ def ripple_summary(trace: Any, psi_ref: Any, run_mask: Any, rip_mask: Any) -> di
         "T_rip_pp_nm": t_stats["pp"],
         "psi_rip_std_wb": p_stats["std"],
         "psi_rip_pp_wb": p_stats["pp"],
+        "T_rip_p1_p99_nm": percentile_span(trace.te_nm, trace.torque_ref_nm, rip_mask),
+        "psi_rip_p1_p99_wb": percentile_span(trace.psi_wb, psi_ref, rip_mask),
     }
 
 
@@ -409,11 +437,11 @@ class RunWindows:
 
 
 def run_windows(trace: Any, model: Model, stats_window: tuple[float, float] | None, window_s: float,
-                whole_run: str) -> RunWindows:
+                whole_run: str, stats_desc: str = "window given by the caller") -> RunWindows:
     """The windows of a topology's metric set, described for the result's ``window`` entry.
 
     RMSE-type metrics over the whole run (described as ``whole_run``) or
-    over ``stats_window``; std/pp ripples over the steady windows (last
+    over ``stats_window`` (described as ``stats_desc``); std/pp ripples over the steady windows (last
     ``window_s`` of each constant-reference segment) or ``stats_window``.
     """
     dt, n = trace.dt_s, trace.n
@@ -432,7 +460,7 @@ def run_windows(trace: Any, model: Model, stats_window: tuple[float, float] | No
     run_mask = np.zeros(n, dtype=bool)
     run_mask[sl] = True
     run_desc = {"t0_s": sample_time(sl.start, dt), "t1_s": sample_time(sl.stop, dt),
-                "n_samples": sl.stop - sl.start, "description": "window given by the caller"}
+                "n_samples": sl.stop - sl.start, "description": stats_desc}
     return RunWindows(windows, sl, run_mask, run_desc, run_mask,
                       {**run_desc, **_all_steady(trace, model, [stats_window])})
 
@@ -460,6 +488,34 @@ def thd_ia(trace: Any, model: Model, tw: tuple[float, float] | None, f_max_hz: f
         return not_computed(str(exc), window_s=list(tw))
     info["description"] = (f"{where} [{tw[0]:g}, {tw[1]:g}) s, {info['n_periods']} fundamental periods, "
                            f"harmonics {info['harmonics'][0]}..{info['harmonics'][1]}")
+    info["fundamental"] = "measured: mean electrical speed of the plant over the window"
+    info.update(check_steady(trace, model, *tw).as_json())
+    return value, info
+
+
+def nominal_fundamental_hz(trace: Any, pole_pairs: int, t0: float, t1: float) -> float:
+    """Nominal fundamental of the phase currents: p * mean |speed reference| over [t0, t1) / (2*pi)."""
+    sl = window_slice(trace.dt_s, t0, t1, trace.n)
+    w_ref = float(np.mean(np.abs(np.asarray(trace.speed_ref_rad_s[sl], dtype=np.float64))))
+    return pole_pairs * w_ref / (2.0 * math.pi)
+
+
+def thd_ia_nominal(trace: Any, model: Model, tw: tuple[float, float] | None,
+                   f_max_hz: float) -> tuple[float, dict[str, Any]]:
+    """THD of i_a over ``tw`` with the nominal fundamental (:func:`nominal_fundamental_hz`: from the
+    speed reference, not the measured speed), harmonics 2 .. min(f_max_hz, fs/2)/f1; NaN and the
+    reason when there is no window."""
+    if tw is None:
+        return not_computed("no steady window with a nonzero speed reference")
+    f1 = nominal_fundamental_hz(trace, model.motor.pole_pairs, *tw)
+    try:
+        value, info = thd(trace.ia_a, trace.dt_s, tw[0], tw[1], f1, f_max_hz)
+    except ValueError as exc:
+        return not_computed(str(exc), window_s=list(tw))
+    info["description"] = (f"i_a over [{info['t0_s']:g}, {info['t1_s']:g}) s, {info['n_periods']} periods of the "
+                           f"nominal fundamental {f1:.6g} Hz (p * |n*| / 60), harmonics "
+                           f"{info['harmonics'][0]}..{info['harmonics'][1]} (<= {info['f_max_hz']:.6g} Hz)")
+    info["fundamental"] = "nominal: pole pairs * speed reference"
     info.update(check_steady(trace, model, *tw).as_json())
     return value, info
 
@@ -475,7 +531,8 @@ def steady_ripples(trace: Any, model: Model, windows: list[tuple[float, float]],
         ps = ripple_stats(trace.psi_wb, psi_ref, m)
         rows.append({"t0_s": a, "t1_s": b, "T_rip_RMSE_nm": ts["rmse"], "T_rip_std_nm": ts["std"],
                      "T_rip_pp_nm": ts["pp"], "psi_rip_RMSE_wb": ps["rmse"], "psi_rip_std_wb": ps["std"],
-                     "psi_rip_pp_wb": ps["pp"], **check_steady(trace, model, a, b).as_json()})
+                     "psi_rip_pp_wb": ps["pp"], "T_rip_p1_p99_nm": percentile_span(trace.te_nm, trace.torque_ref_nm, m),
+                     "psi_rip_p1_p99_wb": percentile_span(trace.psi_wb, psi_ref, m), **check_steady(trace, model, a, b).as_json()})
     return rows
 
 
@@ -484,9 +541,10 @@ def steady_ripples(trace: Any, model: Model, windows: list[tuple[float, float]],
 # ---------------------------------------------------------------------------
 #: window entries that cover several metrics (the std/pp ripples over the steady windows)
 WINDOW_GROUPS: dict[str, tuple[str, ...]] = {
-    "ripple_std_pp": ("T_rip_std_nm", "T_rip_pp_nm", "psi_rip_std_wb", "psi_rip_pp_wb"),
+    "ripple_std_pp": ("T_rip_std_nm", "T_rip_pp_nm", "psi_rip_std_wb", "psi_rip_pp_wb",
+                      "T_rip_p1_p99_nm", "psi_rip_p1_p99_wb"),
     "ripple_std_pp_Vo": ("T_rip_std_nm", "T_rip_pp_nm", "psi_rip_std_wb", "psi_rip_pp_wb",
-                         "Vo_std_v", "Vo_pp_v", "Vo_mean_v"),
+                         "T_rip_p1_p99_nm", "psi_rip_p1_p99_wb", "Vo_std_v", "Vo_pp_v", "Vo_mean_v"),
 }
 
 

@@ -111,6 +111,13 @@ class Topology(Protocol):
         """Torque-threshold sweep (``simulate --sweep-eps``), or Unsupported."""
         ...
 
+    def paper_table(self, model: Model, data: dict) -> dict:
+        """The seed's published figures next to ours for ``data`` (a :meth:`simulate` or
+        :meth:`sweep_eps` result), with the ratios the seed draws (``simulate --paper``): JSON-ready,
+        ``available`` and a printable ``_table``; when the topology has no published figures for this
+        config or scenario, ``available`` is false and ``_table`` one line saying so."""
+        ...
+
     def tables_text(self, model: Model, source: str | None, log: Log) -> str:
         """The derived switch tables and vector sets as text (``mpcgen tables``); ``source`` is the
         ``--utilisation`` option (None: the topology's default)."""

@@ -8,7 +8,11 @@ Definitions (docs/simulation.md "Metrics", mpdtc-three-level.md):
   CONTROLLER's flux reference of the same period (``trace.psi_ref_wb``; the
   three-level psi* follows T* by MTPA, so it is not a constant).
 * ``THD_ia_percent``: :func:`codegen.metrics.thd` of i_a (harmonics up to 10 kHz or
-  fs/2) over the last steady window with nonzero speed.
+  fs/2) over the last steady window with nonzero speed, fundamental measured
+  (mean electrical speed); ``THD_ia_nominal_percent``: the same with the
+  nominal fundamental (pole pairs * speed reference).
+* ``T_rip_p1_p99_nm``, ``psi_rip_p1_p99_wb``: 1st-99th percentile span of the
+  ripple error, over the windows of the std/pp ripples.
 * ``Vo_std_v``, ``Vo_pp_v``, ``Vo_mean_v``: neutral-point voltage V_o = (u_c1 -
   u_c2)/2 of the plant at the sample instants, over the steady windows.
 * ``THD_uab_percent``: THD of the switched line voltage u_ab at sub-period
@@ -61,6 +65,7 @@ from codegen.metrics import (
     steady_ripples,
     thd,
     thd_ia,
+    thd_ia_nominal,
     thd_window,
     window_mask,
     window_slice,
@@ -220,13 +225,14 @@ def three_level_metrics(
     f_max_hz: float = 10e3,
     uab_grid_s: float = UAB_GRID_S,
     uab_f_max_hz: float = UAB_F_MAX_HZ,
+    stats_desc: str = "window given by the caller",
 ) -> dict[str, Any]:
     """The three-level metric set of one closed-loop run (JSON-ready values; ``window_s`` defaults to
-    ``scenario.window_s``)."""
+    ``scenario.window_s``; ``stats_desc`` describes ``stats_window`` in the result's ``window``)."""
     window_s = model.scenario.window_s if window_s is None else window_s
     dt = trace.dt_s
     psi_ref = trace.psi_ref_wb.astype(np.float64)
-    w = run_windows(trace, model, stats_window, window_s, "whole run")
+    w = run_windows(trace, model, stats_window, window_s, "whole run", stats_desc)
     sl, run_desc = w.sl, w.run_desc
     uab_before: float | None = 0.0  # OOO before the first period
     if stats_window is not None and sl.start > 0:
@@ -243,6 +249,7 @@ def three_level_metrics(
 
     tw = thd_window(trace, model, window_s)
     thd_ia_value, ia_info = thd_ia(trace, model, tw, f_max_hz, "i_a over")
+    thd_nom, nom_info = thd_ia_nominal(trace, model, tw, f_max_hz)
     thd_uab, uab_info = not_computed("no steady window with a nonzero speed reference")
     if tw is not None:
         try:
@@ -278,6 +285,7 @@ def three_level_metrics(
         "max_line_jump_udc2": jumps["max_udc2"],
         "f_ave_hz": legs / (3.0 * t_run) if t_run > 0 else math.nan,
         "Cal_ave": float(np.mean(trace.n_eval[sl])) if sl.stop > sl.start else math.nan,
+        "THD_ia_nominal_percent": thd_nom,
         "window": {
             "T_rip_RMSE_nm": run_desc,
             "psi_rip_RMSE_wb": {**run_desc, "reference": "controller psi_ref_wb of each period"},
@@ -292,6 +300,7 @@ def three_level_metrics(
             },
             "ripple_std_pp_Vo": w.rip_desc,
             "THD_ia_percent": ia_info,
+            "THD_ia_nominal_percent": nom_info,
             "THD_uab_percent": uab_info,
         },
         "steady": steady,

@@ -15,7 +15,7 @@ from codegen.errors import Unsupported
 from codegen.hostbuild import HostLib
 from codegen.model import STRATEGIES_BY_TOPOLOGY, Model
 from codegen.teststates import in_format
-from codegen.topologies.ttype import fwstates, scenarios, sim
+from codegen.topologies.ttype import fwstates, paper, scenarios, sim
 from codegen.topologies.ttype import reference as ref
 from codegen.topologies.ttype import report as report_md
 from codegen.topologies.ttype import states as test_states
@@ -82,6 +82,10 @@ def sweep_eps(model: Model, eps_list: list[float], log: Log) -> NoReturn:
     raise Unsupported("--sweep-eps: the torque-threshold sweep belongs to the two-level strategies s1-s3; "
                       f"{model.source} is a t-type config (strategies {', '.join(strategies)}), "
                       "whose MPDTC has no torque threshold")
+
+
+def paper_table(model: Model, data: dict) -> dict:
+    return paper.paper_table(model, data)
 
 
 def tables_text(model: Model, source: str | None, log: Log) -> str:

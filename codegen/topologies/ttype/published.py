@@ -119,3 +119,74 @@ FALLBACK_EXAMPLE = FallbackExample(7, 5, 1, ("u_s1^u1", "u_m1^u1", "u8"))
 
 #: candidate counts stated in the text (寻优次数 "3 或 5 或 6 或 7")
 PUBLISHED_GROUP_COUNTS: tuple[int, ...] = (3, 5, 6, 7)
+
+
+# ---------------------------------------------------------------------------
+# Table 4: the experiment's motor (表4 电机参数) and section 3's operating points.
+# ---------------------------------------------------------------------------
+class SeedMotor(NamedTuple):
+    rs_ohm: float
+    ld_h: float
+    lq_h: float
+    psi_f_wb: float
+    pole_pairs: int
+    rated_speed_rpm: float
+    rated_torque_nm: float
+
+
+TABLE4_MOTOR = SeedMotor(1.75, 1.6e-3, 1.6e-3, 0.045, 5, 3000.0, 1.27)
+#: section 3 / 3.1: Udc = 220 V, control period 50 us, steady runs at rated load 1.27 N*m
+UDC_V = 220.0
+TS_S = 50e-6
+
+
+# ---------------------------------------------------------------------------
+# Table 5: torque ripple, flux ripple and i_a THD of both MPDTC at the three
+# steady speeds (表5 两种MPDTC各项控制目标), T* = 1.27 N*m.  The seed names the
+# columns Delta T_e / N*m, Delta psi_s / Wb and i_a THD / % without defining
+# the ripple statistic (RMSE, std or peak-to-peak: not stated).
+# ---------------------------------------------------------------------------
+class Table5Row(NamedTuple):
+    speed_rpm: float
+    strategy: str  # "mpdtc27" | "mpdtc63"
+    dte_nm: float  # Delta T_e / N*m
+    dpsi_wb: float  # Delta psi_s / Wb
+    thd_ia_percent: float  # i_a THD / %
+
+
+TABLE5_STEADY: tuple[Table5Row, ...] = records(Table5Row, split_rows("""
+# speed | strategy | dTe   | dpsi   | THD
+  300   | mpdtc27  | 0.372 | 0.0027 | 16.85
+  300   | mpdtc63  | 0.249 | 0.0019 | 9.36
+  1800  | mpdtc27  | 0.413 | 0.0026 | 18.28
+  1800  | mpdtc63  | 0.265 | 0.0018 | 11.49
+  3000  | mpdtc27  | 0.302 | 0.0025 | 17.25
+  3000  | mpdtc63  | 0.189 | 0.0017 | 9.57
+""", 5), (float, str, float, float, float))
+
+# Text after Table 5: reductions (%) of 63- vs 27-MPDTC per speed, as printed
+# (torque ripple, flux ripple, i_a THD); they equal 100*(1 - 63/27) of Table 5.
+TABLE5_REDUCTIONS_PERCENT: dict[float, tuple[float, float, float]] = {
+    300.0: (33.06, 29.63, 44.45),
+    1800.0: (35.84, 30.77, 37.14),
+    3000.0: (37.42, 32.00, 44.52),
+}
+
+# Section 3.1, Fig. 9 (图9 程序执行时间): execution time per control period on
+# the TMS320F28377 (200 MHz), us; the text gives the reduction 11.52 %.
+FIG9_EXEC_TIME_US: dict[str, float] = {"mpdtc27": 38.2, "mpdtc63": 33.8}
+FIG9_EXEC_TIME_REDUCTION_PERCENT = 11.52
+
+# Section 3.2, Fig. 11 text: u_ab THD at rated load and speed, % (reduction 33.08 %).
+FIG11_UAB_THD_PERCENT: dict[str, float] = {"mpdtc27": 86.75, "mpdtc63": 58.05}
+FIG11_UAB_THD_REDUCTION_PERCENT = 33.08
+
+# Section 3.2, Fig. 12 text: largest line-voltage jump, in units of Udc/2:
+# 27-MPDTC jumps by +-Udc "frequently" (2 units; up to 2 Udc = 4 units possible
+# per the introduction), 63-MPDTC "basically" limited to Udc/2 (1 unit; some
+# +-Udc at dead time).
+FIG12_MAX_JUMP_UDC2: dict[str, int] = {"mpdtc27": 2, "mpdtc63": 1}
+
+# Candidates evaluated per period: 27 for 27-MPDTC, "3 or 5 or 6 or 7" for
+# 63-MPDTC (section 3.1 text; PUBLISHED_GROUP_COUNTS).
+CANDIDATES_27 = 27

@@ -1,7 +1,10 @@
 """The seed-001 metric set of one closed-loop two-level run (definitions: codegen.metrics)."""
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING, Any
+
+import numpy as np
 
 from codegen.metrics import (
     cal_ave,
@@ -12,14 +15,25 @@ from codegen.metrics import (
     run_windows,
     steady_ripples,
     thd_ia,
+    thd_ia_nominal,
     thd_window,
 )
 from codegen.model import Model
+from codegen.topologies.twolevel.mtpa import mtpa_flux
 from codegen.topologies.twolevel.records import FAULT_BITS
 
 if TYPE_CHECKING:  # pragma: no cover
     from codegen.topologies.twolevel.sim import Trace
 
+
+
+def flux_reference_of(trace: Any, model: Model) -> Any:
+    """psi* the flux ripple is measured about: ``controller.psi_ref_wb`` (constant), or for
+    ``controller.psi_ref = "mtpa"`` the float64 MTPA flux of each sample's T* (the step interpolates
+    the same curve from a table, within 5e-5 Wb: docs/algorithms.md "Flux reference")."""
+    if model.controller.psi_ref == "mtpa":
+        return mtpa_flux(model.motor, np.asarray(trace.torque_ref_nm, np.float64))
+    return float(model.controller.psi_ref_wb)
 
 def two_level_metrics(
     trace: Trace, model: Model, stats_window: tuple[float, float] | None = None, window_s: float | None = None,
@@ -41,6 +55,14 @@ def two_level_metrics(
     * ``THD_ia_percent``: over the last steady window with a nonzero speed
       reference (:func:`thd_window`), f1 from the mean electrical speed there,
       harmonics up to ``f_max_hz``; NaN (with the reason) if there is none.
+      ``THD_ia_nominal_percent``: the same window with the nominal fundamental
+      (pole pairs * speed reference).
+    * ``T_rip_p1_p99_nm``, ``psi_rip_p1_p99_wb``: 1st-99th percentile span of the
+      error, over the windows of the std/pp ripples.
+    * ``zero_vector_percent``: samples whose decision is V0, in % (seed 001's
+      "zero-vector usage" of section 6); ``shortcut_percent``: samples decided
+      without evaluating a candidate (n_eval = 0, the eps_T zero-vector
+      shortcut); both over the RMSE window.
 
     ``steady`` lists the ripple statistics of each steady window.  Every
     window is checked (:func:`codegen.metrics.check_steady`): its entry says
@@ -48,20 +70,26 @@ def two_level_metrics(
     ``not_computed`` map metric keys to reasons (:func:`codegen.metrics.metric_flags`).
     """
     window_s = model.scenario.window_s if window_s is None else window_s
-    psi_ref = float(model.controller.psi_ref_wb)
+    psi_ref = flux_reference_of(trace, model)
     w = run_windows(trace, model, stats_window, window_s,
                     "whole run, as seed 001 eq. (7)-(10) (n = all samples, t = simulated time)")
     sl, run_desc = w.sl, w.run_desc
     sw0 = int(trace.applied_sw[sl.start - 1]) if sl.start > 0 else 0
     t_run = (sl.stop - sl.start) * trace.dt_s
-    thd_value, thd_info = thd_ia(trace, model, thd_window(trace, model, window_s), f_max_hz,
-                                 "i_a over the last steady window with nonzero speed")
+    tw = thd_window(trace, model, window_s)
+    thd_value, thd_info = thd_ia(trace, model, tw, f_max_hz, "i_a over the last steady window with nonzero speed")
+    thd_nom, thd_nom_info = thd_ia_nominal(trace, model, tw, f_max_hz)
+    n_run = sl.stop - sl.start
+    vec, n_eval = np.asarray(trace.vector[sl]), np.asarray(trace.n_eval[sl])
 
     out = {
         **ripple_summary(trace, psi_ref, w.run_mask, w.rip_mask),
         "THD_ia_percent": thd_value,
         "f_ave_hz": f_ave_hz(trace.applied_sw[sl], t_run, sw0),
         "Cal_ave": cal_ave(trace.n_eval[sl]),
+        "THD_ia_nominal_percent": thd_nom,
+        "zero_vector_percent": 100.0 * float(np.count_nonzero(vec == 0)) / n_run if n_run else math.nan,
+        "shortcut_percent": 100.0 * float(np.count_nonzero(n_eval == 0)) / n_run if n_run else math.nan,
         "window": {
             "T_rip_RMSE_nm": run_desc,
             "psi_rip_RMSE_wb": run_desc,
@@ -69,6 +97,9 @@ def two_level_metrics(
             "Cal_ave": run_desc,
             "ripple_std_pp": w.rip_desc,
             "THD_ia_percent": thd_info,
+            "THD_ia_nominal_percent": thd_nom_info,
+            "zero_vector_percent": run_desc,
+            "shortcut_percent": run_desc,
         },
         "steady": steady_ripples(trace, model, w.windows, psi_ref),
         **fault_counts(trace.fault, FAULT_BITS),

@@ -10,9 +10,12 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+import numpy as np
+
 from codegen.metrics import amplitude_spectrum, fundamental_hz, thd, thd_window, window_slice
 from codegen.model import Model
 from codegen.plotting import new_figure, plot_lines, plot_phase_currents, plot_torque, save_figure
+from codegen.topologies.twolevel.metrics import flux_reference_of
 
 if TYPE_CHECKING:  # pragma: no cover
     from codegen.topologies.twolevel.sim import Trace
@@ -37,10 +40,13 @@ def plot_two_level(trace: Trace, model: Model, strategy: str, outdir: str | Path
         (trace.speed_rpm, "actual n", {"color": "tab:blue", "lw": 0.8}),
     ]))
     paths.append(plot_torque(out / f"{strategy}_torque.png", title, trace))
+    psi_ref = flux_reference_of(trace, model)
+    flux_lines = [(trace.psi_wb, "plant |psi_s|", {"color": "tab:blue", "lw": 0.4})]
+    if np.ndim(psi_ref):
+        flux_lines.append((psi_ref, "reference psi* (MTPA of T*)", {"color": "k", "lw": 1.0, "ls": "--"}))
     paths.append(plot_lines(out / f"{strategy}_flux.png", f"{title}: stator-flux magnitude",
-                            "stator flux |psi_s| / Wb", t,
-                            [(trace.psi_wb, "plant |psi_s|", {"color": "tab:blue", "lw": 0.4})],
-                            hline=(model.controller.psi_ref_wb, "reference psi*")))
+                            "stator flux |psi_s| / Wb", t, flux_lines,
+                            hline=None if np.ndim(psi_ref) else (float(psi_ref), "reference psi*")))
 
     # phase currents: whole run + zoom on two fundamental periods of the THD window
     tw = thd_window(trace, model)

@@ -18,7 +18,7 @@ import numpy as np
 from codegen.hostbuild import HostLib
 from codegen.model import STRATEGIES_BY_TOPOLOGY, Model
 from codegen.teststates import in_format
-from codegen.topologies.twolevel import fwstates, scenarios, sim, switch_tables
+from codegen.topologies.twolevel import fwstates, paper, scenarios, sim, switch_tables
 from codegen.topologies.twolevel import reference as ref
 from codegen.topologies.twolevel import report as report_md
 from codegen.topologies.twolevel import states as test_states
@@ -72,6 +72,10 @@ def simulate(model: Model, chosen: list[str], plots: Path | None, log: Log, trac
 
 def sweep_eps(model: Model, eps_list: list[float], log: Log) -> dict:
     return scenarios.run_threshold_sweep(model, eps_list, log=log)
+
+
+def paper_table(model: Model, data: dict) -> dict:
+    return paper.paper_table(model, data)
 
 
 def tables_text(model: Model, source: str | None, log: Log) -> str:

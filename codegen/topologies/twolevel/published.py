@@ -219,3 +219,58 @@ TABLE9_ZERO_VECTOR_PERCENT: tuple[tuple[str, float], ...] = records(lambda s, p:
   s2           | 46.00
   s3           | 46.02
 """, 2), (str, float))
+
+
+# ---------------------------------------------------------------------------
+# The seed's motors and scenarios (section 3: SPMSM, Tables 1-8 and 10-11;
+# section 6: IPMSM, Table 9).  Used to tell whether a config runs the
+# paper's case (its published figures apply) or another one.
+# ---------------------------------------------------------------------------
+class SeedMotor(NamedTuple):
+    rs_ohm: float
+    ld_h: float
+    lq_h: float
+    psi_f_wb: float
+    pole_pairs: int
+
+
+# Section 3 text (仿真用表面式永磁同步电机参数): 4 s, 80 000 samples of 50 us,
+# 500 -> -500 r/min at 2 s, load 10 / -10 (1 s) / 10 (3 s) N*m.
+SPMSM_MOTOR = SeedMotor(0.2, 0.0085, 0.0085, 0.175, 4)
+SPMSM_DURATION_S = 4.0
+# Section 6 text (内置式永磁同步电机): 2 s, 1000 -> -1000 r/min at 1 s, load
+# 15 / -15 (0.5 s) / 15 (1.5 s) N*m, eps_T = 0.75 N*m.
+IPMSM_MOTOR = SeedMotor(0.25, 0.0033, 0.0073, 0.2264, 3)
+IPMSM_DURATION_S = 2.0
+
+
+# ---------------------------------------------------------------------------
+# Section 6 text after Table 9: the ratios the seed draws (strategy / conventional, %).
+# ---------------------------------------------------------------------------
+# "平均开关频率分别为传统模型预测转矩控制的 77.48%, 77.09% 和 76.12%"
+TABLE9_F_AVE_RATIO_PERCENT: dict[str, float] = {"s1": 77.48, "s2": 77.09, "s3": 76.12}
+# "平均遍历电压矢量个数分别为传统模型预测转矩控制的 58.29%, 32.86% 和 29.14%"
+TABLE9_CAL_AVE_RATIO_PERCENT: dict[str, float] = {"s1": 58.29, "s2": 32.86, "s3": 29.14}
+
+
+# ---------------------------------------------------------------------------
+# Table 11 (表11 不同控制策略的计算耗时): SPMSM scenario on an STM32H743,
+# 80 000 steps of each strategy (test cases of Table 10), times in ms.
+# ---------------------------------------------------------------------------
+class Table11Row(NamedTuple):
+    strategy: str
+    zero_outputs: int  # steps that output V0 directly (torque error within eps_T)
+    predictions: int  # steps that ran the prediction loop (s3: 22456 with 3 + 25123 with 4 candidates)
+    total_ms: float  # total computation time
+
+
+TABLE11_TIMING: tuple[Table11Row, ...] = records(Table11Row, split_rows("""
+# strategy    | V0 outputs | predictions | total / ms
+  conventional | 0          | 80000       | 2592.4
+  s1           | 34236      | 45764       | 1495.7
+  s2           | 34115      | 45885       | 854.5
+  s3           | 32421      | 47579       | 764.2
+""", 4), (str, int, int, float))
+TABLE11_STEPS = 80000
+# Section 7 text: "计算总耗时分别为传统模型预测转矩控制的 57.70%, 32.96% 和 29.48%"
+TABLE11_TIME_RATIO_PERCENT: dict[str, float] = {"s1": 57.70, "s2": 32.96, "s3": 29.48}
