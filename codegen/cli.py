@@ -6,6 +6,7 @@ Exit codes: 0 success; 1 the job ran and failed (mismatches, build failure);
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import sys
 from collections.abc import Callable, Sequence
@@ -143,6 +144,14 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     else:
         data = topo.simulate(model, _strategies(args, model), plots, log=log, traces=traces)
     print(data.pop("_table"))
+    # the plant simulated (not in the config hash: it never reaches the C)
+    data["plant"] = {**dataclasses.asdict(model.plant),
+                     "actuation_delay_periods": model.plant.delay_periods(model.controller.delay_compensation)}
+    if args.paper:
+        side = topo.paper_table(model, data)
+        print()
+        print(side.pop("_table"))
+        data["paper"] = side
     for warning in data.pop("_warnings", []):
         print(f"mpcgen: warning: {warning}", file=sys.stderr)
     _write_json(args.json, data)
@@ -235,6 +244,13 @@ def cmd_report(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+# ---------------------------------------------------------------- sweep
+def cmd_sweep(args: argparse.Namespace) -> int:
+    from codegen.stages import sweep
+
+    return sweep.command(args, _load(args), _log(args.quiet))
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="mpcgen", description="FCS-MPC code generator for PMSM drives: generate, verify bit for bit, simulate, benchmark.")
     p.add_argument("--version", action="version", version=f"mpcgen {__version__}")
@@ -260,6 +276,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--plots", help="directory for PNG plots")
     s.add_argument("--traces", metavar="FILE",
                    help="write every run's time series (npz; CSV if FILE ends in .csv), one column per signal")
+    s.add_argument("--paper", action="store_true",
+                   help="print the paper's published figures next to ours, with the ratios the paper draws")
     s.add_argument("--sweep-eps", metavar="START:STOP:STEP",
                    help="threshold sweep of the MPTC paper's Tables 1-2 with strategy s1 (e.g. 0.1:1.5:0.1)")
     s.set_defaults(func=cmd_simulate)
@@ -290,6 +308,25 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument("--board", required=True, help="stm32h743, tms320f28377, qemu-m7 or host")
     f.add_argument("-o", "--output", required=True, help="output directory")
     f.set_defaults(func=cmd_firmware)
+
+    w = sub.add_parser("sweep", help="parameter grids and Monte Carlo mismatch studies of simulate, on Dask")
+    _add_config_args(w)
+    w.add_argument("--strategies", help="comma list (default: all of the topology)")
+    w.add_argument("--param", action="append", default=[], metavar="SECTION.FIELD=LIST_OR_RANGE",
+                   help="a grid axis (repeatable): a comma list (0.2,0.5,1) or START:STOP:STEP")
+    w.add_argument("--monte-carlo", dest="monte_carlo", type=int, default=0, metavar="N",
+                   help="N runs with parameters drawn around the config's (--spread)")
+    w.add_argument("--spread", action="append", default=[], metavar="SECTION.FIELD=+-PCT",
+                   help="Monte Carlo: uniform spread of a field in percent (repeatable), e.g. plant.rs_ohm=+-20")
+    w.add_argument("--seed", type=int, default=1, help="Monte Carlo seed (default 1)")
+    w.add_argument("--scheduler", metavar="tcp://HOST:PORT",
+                   help="a running dask.distributed scheduler (default: a LocalCluster on this machine's cores)")
+    w.add_argument("--workers", type=int, default=None, help="LocalCluster workers (default: one per core)")
+    w.add_argument("--serial", action="store_true", help="run in this process, no Dask (reference for checks)")
+    w.add_argument("--json", help="write every run's parameters and metrics as JSON")
+    w.add_argument("--csv", help="write one row per run and strategy as CSV")
+    w.add_argument("--plot", help="PNG: metric against the parameter, or the Monte Carlo distribution")
+    w.set_defaults(func=cmd_sweep)
 
     r = sub.add_parser("report", help="quantisation report of the fixed-point controller (formats, errors, "
                                       "agreement with float32, closed loop)")

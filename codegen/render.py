@@ -9,6 +9,7 @@ target.
 from __future__ import annotations
 
 import dataclasses
+import functools
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -17,7 +18,7 @@ import jinja2
 from codegen import __version__
 from codegen.kernels.consts import Const
 from codegen.model import Model
-from codegen.numfmt import NumberFormat, number_format
+from codegen.numfmt import number_format
 from codegen.numfmt.float32 import FLOAT32, c_float_literal
 from codegen.records import REAL, Record
 from codegen.resources import templates_dir
@@ -69,9 +70,11 @@ class TableRow:
     label: str
 
 
-def environment(nf: NumberFormat | None = None) -> jinja2.Environment:
+@functools.cache
+def environment(format_name: str | None = None) -> jinja2.Environment:
     """The jinja2 environment: strict undefined, no autoescape, the C-float filter and, with a
-    number format, its ``real_literal`` filter (exact C literal of a value in the format)."""
+    number format's name, its ``real_literal`` filter (exact C literal of a value in the format).  One per
+    format and process (jinja2 keeps the compiled templates, reloading a template whose file changed)."""
     env = jinja2.Environment(
         loader=jinja2.FileSystemLoader(str(templates_dir())),
         undefined=jinja2.StrictUndefined,
@@ -79,8 +82,8 @@ def environment(nf: NumberFormat | None = None) -> jinja2.Environment:
         autoescape=False,
     )
     env.filters["c_float"] = c_float_literal
-    if nf is not None:
-        env.filters["real_literal"] = nf.literal
+    if format_name is not None:
+        env.filters["real_literal"] = number_format(format_name).literal
     return env
 
 
@@ -103,7 +106,7 @@ def base_context(model: Model, target: str) -> dict:
 
 def render_files(templates: dict[str, str], ctx: dict) -> dict[str, str]:
     """File name -> rendered text, for file name -> template path (in the context's number format)."""
-    env = environment(number_format(ctx["number_format"]) if "number_format" in ctx else None)
+    env = environment(ctx.get("number_format"))
     return {name: env.get_template(tpl).render(ctx) for name, tpl in templates.items()}
 
 
