@@ -6,9 +6,8 @@ Python reference and the compiled C and demands equal bits.
 
     .venv/bin/python tests/golden/record.py
 
-The files in the repository were recorded before the architecture change
-(with the record field names of then: ``sw_prev``, ``te_nm``, ``psi_wb``;
-``tests/test_golden.py`` maps them); re-recording writes today's names.
+The files in the repository were last recorded when the examples took the
+seed papers' plant timing (issue 11), with today's field and key names.
 
 Writes ``controller_<config>.npz`` (per strategy: input and output record
 fields, keys ``<strategy>/in/<field>`` and ``<strategy>/out/<field>``) and

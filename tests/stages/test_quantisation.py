@@ -4,9 +4,19 @@ For the seed configs in fixed point, every strategy: the fixed and float32
 controllers pick the same vector (and switching state) on >= 99 % of the
 recorded closed-loop states, and the fixed controller's closed-loop torque
 ripple is within 10 % of the float32 controller's.
+
+The comparison runs the seed scenarios with the timing each controller
+assumes (``plant.actuation_delay_periods`` 0 without delay compensation, as
+before the examples took the seed papers' uncompensated one-period delay).
+With that delay the two-level loop is marginal at the SPMSM's speed reversal
+(s2 holds the zero vector at the torque limit while the current rises): a run
+can trip the current guard from a difference of one decision, so a ripple
+ratio there measures the trip, not the quantisation (simulate reports such a
+trip: its fault count and a warning, ``tests/stages/test_simulate_checks.py``).
 """
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import numpy as np
@@ -28,7 +38,9 @@ def results():
 
     def get(path):
         if path not in cache:
-            cache[path] = analyse(load_config(path, {"controller.number_format": "fixed"}), random_states=5_000)
+            m = load_config(path, {"controller.number_format": "fixed"})
+            m = m.replace(plant=dataclasses.replace(m.plant, actuation_delay_periods=None))
+            cache[path] = analyse(m, random_states=5_000)
         return cache[path]
 
     return get

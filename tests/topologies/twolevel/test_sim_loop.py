@@ -72,8 +72,7 @@ def test_full_scenario_follows_reference(full_run, spmsm_model):
     with pytest.raises(ValueError):
         tr.te_nm[0] = 1.0
     rate = tr.n / elapsed
-    print(f"\nclosed loop, stub controller, 50 RK4 sub-steps: {rate:,.0f} periods/s")
-    assert elapsed < 20.0  # "must not take minutes"
+    print(f"\nclosed loop, stub controller, 50 RK4 sub-steps: {rate:,.0f} periods/s")  # mpcgen bench measures it
 
 
 def test_chunked_equals_one_long_run(stub, spmsm_model, full_run):
