@@ -127,6 +127,13 @@ class Topology(Protocol):
         """The same tables as flat rows, each with a ``table`` column (``tables --json/--csv``)."""
         ...
 
+    def essential_ops(self, model: Model, tables: Any) -> dict[str, dict[str, int]]:
+        """The operations the step's algorithm cannot do without, for ``mpcgen bench``'s cycle bound:
+        ``per_step``, ``per_candidate`` (times the output's ``n_eval``) and ``per_member`` (times the
+        output's ``n_members`` where the record has it), each ``{"fp", "sqrt", "div", "load", "store"}``
+        counts."""
+        ...
+
     def export_tables(self, model: Model, path: Path, log: Log) -> str:
         """Run the training and write the trained tables with their provenance (``tables --derive``),
         or Unsupported; returns a one-paragraph summary."""

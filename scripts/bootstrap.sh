@@ -9,6 +9,8 @@ need_apt=()
 command -v arm-none-eabi-gcc >/dev/null 2>&1 || need_apt+=(gcc-arm-none-eabi)
 [ -e /usr/lib/arm-none-eabi/newlib/libc.a ] || [ -e /usr/lib/arm-none-eabi/lib/libc.a ] || need_apt+=(libnewlib-arm-none-eabi)
 command -v qemu-system-arm >/dev/null 2>&1 || need_apt+=(qemu-system-arm)
+# llvm-mca (Cortex-M7 pipeline model) for the cycle estimate of `mpcgen bench --emulated` (codegen/stages/cycles.py)
+command -v llvm-mca >/dev/null 2>&1 || [ -n "$(ls /usr/lib/llvm-*/bin/llvm-mca 2>/dev/null)" ] || need_apt+=(llvm)
 command -v gcc >/dev/null 2>&1 || need_apt+=(gcc)
 # libFuzzer + sanitizers for the frame decoder's fuzz test (tests/hil/test_fuzz.py): Debian bookworm's clang 14
 command -v clang >/dev/null 2>&1 || need_apt+=(clang)

@@ -13,6 +13,11 @@ Emulated (``--emulated``): instructions per step on the emulated Cortex-M7
 number format (``m7_instructions_per_step``) and, side by side, every number
 format (``m7_instructions_per_step_float32``, ``m7_instructions_per_step_fixed``:
 the same config and strategy with ``controller.number_format`` replaced).
+
+Cycles (``--emulated``, the config's number format): ``m7_cycles_est_min/median/max``, the
+step's executed path in the real image (traced in unicorn) through llvm-mca's Cortex-M7 pipeline
+model, and ``m7_cycles_bound``, the essential operations at the core's issue limits, with
+``m7_cycles_est_over_bound`` (``codegen.stages.cycles``; docs/targets.md "Cycle estimate").
 """
 from __future__ import annotations
 
@@ -25,6 +30,7 @@ import numpy as np
 from codegen import __version__
 from codegen.errors import MpcgenError
 from codegen.model import NUMBER_FORMATS, Model
+from codegen.stages.cycles import METHOD_NOTE
 from codegen.topology import topology_of
 
 
@@ -40,7 +46,8 @@ def host_ns_per_step(libs: dict, states: np.ndarray, repeats: int) -> dict[str, 
     return best
 
 
-def emulated_instructions(model: Model, strategies: list[str], log: Callable[[str], None]) -> dict[str, dict]:
+def emulated_instructions(model: Model, strategies: list[str], log: Callable[[str], None],
+                          cycle_states: int = 256) -> dict[str, dict]:
     """Instructions per step on the emulated Cortex-M7 (QEMU -icount) for each strategy, in every
     number format a config can choose (``codegen.model.NUMBER_FORMATS``): strategy -> format name -> figures, or None
     where the config does not fit another format (its error message under ``"error"``).
@@ -48,10 +55,13 @@ def emulated_instructions(model: Model, strategies: list[str], log: Callable[[st
     Each image replays the same 2 000 states of the baseline's recorded
     trajectory (two-level: the conventional closed-loop run; three-level: the
     27-MPDTC run at rated speed) and also runs the bit-exact self-test; a
-    mismatch or a digest disagreement is an error, never a number.
+    mismatch or a digest disagreement is an error, never a number.  In the config's own number
+    format, each strategy also gets its estimated Cortex-M7 cycles and their lower bound
+    (``codegen.stages.cycles.strategy_cycles``, under ``"cycles"``; ``cycle_states`` bench states traced).
     """
     import tempfile
 
+    from codegen.stages.cycles import strategy_cycles
     from codegen.stages.emulate import EmulationError, run_and_check
 
     own = model.controller.number_format
@@ -75,6 +85,10 @@ def emulated_instructions(model: Model, strategies: list[str], log: Callable[[st
                                          f"({r.mismatches} mismatches)")
                 out[s][fmt] = {"min": r.instr_min, "median": r.instr_median, "max": r.instr_max,
                                "mean": r.instr_mean, "selftest_states": r.states, "mismatches": r.mismatches}
+                if fmt == own:
+                    log(f"  {s} ({fmt}): tracing the step in unicorn, cycles from llvm-mca (Cortex-M7)")
+                    out[s][fmt]["cycles"] = strategy_cycles(variant, tables, Path(tmp) / f"{s}-{fmt}" / "build" /
+                                                            "fw.elf", max_states=cycle_states)
     return out
 
 
@@ -116,7 +130,8 @@ def bench(model: Model, strategies: list[str], emulated: bool = False, repeats: 
     if emulated:
         m7 = emulated_instructions(model, strategies, log=log)
         header += (f"  M7 instr/step {own} (min/median/max)   ratio  "
-                   + " ".join(f"{f:>9s}" for f in m7[base]))
+                   + " ".join(f"{f:>9s}" for f in m7[base])
+                   + f"   M7 est. cycles (min/median/max)  ratio  {'bound':>11s}  est/bound")
     rows = [header]
     for s in strategies:
         host_ratio = ns[s] / ns[base]
@@ -135,6 +150,21 @@ def bench(model: Model, strategies: list[str], emulated: bool = False, repeats: 
             })
             line += (f"  {' ' * (len(own) + 1)}{st['min']:6.0f} / {st['median']:6.0f} / {st['max']:6.0f}"
                      f"   {m7_ratio:6.3f}  {cells}")
+            cy = st["cycles"]
+            cy_ratio = cy["median"] / m7[base][own]["cycles"]["median"]
+            bound = (f"{cy['bound_median']:.0f}" if cy["bound_min"] == cy["bound_max"]
+                     else f"{cy['bound_min']:.0f}-{cy['bound_max']:.0f}")
+            entry.update({
+                "m7_cycles_est_median": cy["median"], "m7_cycles_est_min": cy["min"],
+                "m7_cycles_est_max": cy["max"], "m7_cycles_est_mean": cy["mean"],
+                "m7_cycles_est_ratio_to_conventional": cy_ratio,
+                "m7_cycles_bound": cy["bound_median"], "m7_cycles_bound_min": cy["bound_min"],
+                "m7_cycles_bound_max": cy["bound_max"], "m7_cycles_est_over_bound": cy["est_over_bound"],
+                "m7_cycles_est_states": cy["states"], "m7_cycles_est_paths": cy["paths"],
+                "m7_cycles_est_path_instructions_median": cy["path_instructions_median"],
+            })
+            line += (f"   {cy['min']:6.0f} / {cy['median']:6.0f} / {cy['max']:6.0f}       {cy_ratio:6.3f}"
+                     f"  {bound:>11s}  {cy['est_over_bound']:9.2f}")
         result["strategies"][s] = entry
         rows.append(line)
     rows.append(f"closed-loop simulation ({model.name}, {base}): {result['sim_periods_per_s']:,.0f} periods/s")
@@ -143,5 +173,9 @@ def bench(model: Model, strategies: list[str], emulated: bool = False, repeats: 
                     f"the min/median/max and ratio columns are the config's number format ({own}), the last "
                     "columns the median in every number format (JSON m7_instructions_per_step_<format>), "
                     "each image's self-test bit-exact.")
+        n_traced = m7[base][own]["cycles"]["states"]
+        rows.append(f"M7 est. cycles ({own}): {n_traced} of the bench states, evenly spaced, each traced once; "
+                    + METHOD_NOTE + " bound: median over the traced states (range if it varies with the "
+                    "candidates evaluated); est/bound: median estimate over median bound.")
     result["_table"] = "\n".join(rows)
     return result

@@ -33,6 +33,13 @@ def test_emulated_bench(tmp_path):
     for s in TWO_LEVEL:
         e = data["strategies"][s]
         assert e["m7_instructions_per_step"] > 50 and e["ratio_to_conventional"] > 0
+        # the cycle estimate (traced path through the M7 pipeline model) and the lower bound beside it
+        assert e["m7_cycles_est_min"] <= e["m7_cycles_est_median"] <= e["m7_cycles_est_max"]
+        assert 0 < e["m7_cycles_bound"] <= e["m7_cycles_est_median"]
+        assert e["m7_cycles_est_over_bound"] == pytest.approx(e["m7_cycles_est_median"] / e["m7_cycles_bound"],
+                                                              rel=1e-3)
+        # a step cannot take fewer cycles than half its instructions (two-wide issue)
+        assert e["m7_cycles_est_median"] >= e["m7_instructions_per_step"] / 2
     # every simplified strategy holds the zero vector on most samples: cheaper median
     assert data["strategies"]["s3"]["m7_instructions_per_step"] < data["strategies"]["conventional"]["m7_instructions_per_step"]
 

@@ -110,3 +110,10 @@ if TYPE_CHECKING:  # mypy checks this module against the protocol it implements
     from codegen.topology import Topology
 
     _implements: Topology = _this
+
+
+def essential_ops(model: Model, tables: Any) -> dict[str, dict[str, int]]:
+    """Essential operations per step, per candidate and per member (``opcount``): the cycle bound."""
+    from codegen.topologies.ttype import opcount
+
+    return opcount.essential_ops(tables)

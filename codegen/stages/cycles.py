@@ -1,0 +1,388 @@
+"""Estimated Cortex-M7 cycles per step: the executed instruction path through a pipeline model.
+
+QEMU counts instructions, not cycles (``codegen.stages.emulate``).  This
+module estimates cycles from the real firmware image:
+
+1. **Trace.**  The ELF's loadable segments are mapped into unicorn (Cortex-M7,
+   Thumb, M-profile) at their run addresses (the ``.dtcm_rodata``/``.data``
+   copies Reset_Handler makes are already in place), a stack is set up at the
+   top of RAM, one input record (the bench state, in the step's number format,
+   laid out as ``codegen.records`` binds it) is written to RAM, and
+   ``<prefix>_step(&in, &out)`` runs from its entry to its return.  Every
+   executed translation block is recorded, which gives the executed
+   instruction addresses in order (skipped instructions of an IT block
+   included: the core issues them too).  The output record is read back and
+   compared with the Python reference's, so a wrong path is an error, never a
+   number.
+2. **Disassemble.**  ``arm-none-eabi-objdump -d`` of the image gives each
+   address's instruction; branch targets are replaced by one label, so the
+   path is a straight-line block of assembly llvm-mca accepts.
+3. **Pipeline model.**  ``llvm-mca -mtriple=thumbv7em-none-eabihf
+   -mcpu=cortex-m7 -iterations=1`` (LLVM's Cortex-M7 scheduling model:
+   dual issue, FP latencies, the non-pipelined VSQRT/VDIV) gives the block's
+   ``Total Cycles``.  Each distinct path is modelled once (cached).
+
+Not modelled: branch penalties (taken branches and mispredictions: the path is
+a straight line), instruction and data caches, flash wait states, bus
+contention, interrupts.  On the board the step runs from ITCM with its tables
+in DTCM, where every access is single-cycle, which is what the model assumes.
+The estimate is therefore a lower-leaning figure for the real board's cycles.
+
+:func:`estimate_cycles` traces at most ``max_states`` states, evenly spaced
+over the given ones (``codegen.stages.fwdata.evenly_spaced``).
+"""
+from __future__ import annotations
+
+import glob
+import hashlib
+import re
+import shutil
+import struct
+import subprocess
+from collections.abc import Iterable, Iterator
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from codegen.errors import MpcgenError
+from codegen.model import Model
+from codegen.stages.fwdata import evenly_spaced
+
+__all__ = ["MCA_ARGS", "CycleEstimate", "CycleError", "Elf", "StepTracer", "cycle_bound", "estimate_cycles",
+           "mca_cycles", "llvm_mca", "strategy_cycles", "METHOD_NOTE"]
+
+#: llvm-mca's target: the board's core (thumbv7em, hard float, Cortex-M7 scheduling model)
+MCA_ARGS = ("-mtriple=thumbv7em-none-eabihf", "-mcpu=cortex-m7", "-iterations=1")
+
+#: one-paragraph statement of the method (bench footnote, docs/targets.md)
+METHOD_NOTE = ("estimated M7 cycles: the step's executed instruction path (the real qemu-m7 image traced "
+               "instruction by instruction in unicorn over the bench states) fed to llvm-mca's Cortex-M7 "
+               "pipeline model (-mcpu=cortex-m7, one iteration, Total Cycles); not modelled: branch penalties, "
+               "caches, flash wait states, interrupts (TCM placement makes every memory access single-cycle). "
+               "bound: the essential FP operations, square roots and loads per step at the core's issue limits.")
+
+#: instructions LLVM 14's Cortex-M7 model has no scheduling data for -> an equivalent with the same timing
+_SUBSTITUTES = {"vcmpe.f32": "vcmp.f32", "vcmpe.f64": "vcmp.f64", "vcmp.f32": "vcmp.f32", "vcmp.f64": "vcmp.f64"}
+
+_CODE_BASE, _CODE_SIZE = 0x0000_0000, 0x0040_0000
+_RAM_BASE, _RAM_SIZE = 0x2000_0000, 0x0040_0000
+_STACK_TOP = _RAM_BASE + _RAM_SIZE - 0x100
+_IO_BASE = _RAM_BASE + _RAM_SIZE - 0x0004_0000  # records (below the stack, above any image data)
+_RETURN = _CODE_BASE + _CODE_SIZE - 0x40  # mapped, never executed: the step "returns" here
+
+
+class CycleError(MpcgenError):
+    """The cycle estimate cannot be made (missing tool, bad image, emulated output differs)."""
+
+
+# ---------------------------------------------------------------- ELF
+
+
+@dataclass
+class Elf:
+    """The parts of a little-endian ELF32 image the tracer needs: loadable segments and symbols."""
+
+    segments: list[tuple[int, bytes, int]]  # (run address, file bytes, memory size)
+    symbols: dict[str, tuple[int, int]]  # name -> (address, size)
+
+    @classmethod
+    def read(cls, path: Path) -> Elf:
+        data = Path(path).read_bytes()
+        if data[:4] != b"\x7fELF" or data[4] != 1 or data[5] != 1:
+            raise CycleError(f"{path}: not a little-endian ELF32 image")
+        (e_phoff, e_shoff, _flags, _ehsize, e_phentsize, e_phnum, e_shentsize, e_shnum,
+         _shstrndx) = struct.unpack_from("<IIIHHHHHH", data, 28)
+        segments = []
+        for i in range(e_phnum):
+            p_type, p_offset, p_vaddr, _paddr, p_filesz, p_memsz, _fl, _al = struct.unpack_from(
+                "<8I", data, e_phoff + i * e_phentsize)
+            if p_type == 1:  # PT_LOAD, at its run (virtual) address
+                segments.append((p_vaddr, data[p_offset:p_offset + p_filesz], p_memsz))
+        sections = [struct.unpack_from("<10I", data, e_shoff + i * e_shentsize) for i in range(e_shnum)]
+        symbols: dict[str, tuple[int, int]] = {}
+        for sh in sections:
+            if sh[1] != 2:  # SHT_SYMTAB
+                continue
+            strtab = sections[sh[6]]
+            for off in range(sh[4], sh[4] + sh[5], 16):
+                st_name, st_value, st_size, st_info, _o, _shndx = struct.unpack_from("<IIIBBH", data, off)
+                if st_info & 0xF != 2:  # STT_FUNC
+                    continue
+                start = strtab[4] + st_name
+                name = data[start:data.index(b"\0", start)].decode()
+                symbols[name] = (st_value & ~1, st_size)
+        return cls(segments, symbols)
+
+
+# ---------------------------------------------------------------- tools
+
+
+def _which(exe: str, pattern: str = "") -> str:
+    found = shutil.which(exe)
+    if not found and pattern:
+        found = next(iter(sorted(glob.glob(pattern), reverse=True)), None)
+    if not found:
+        hint = {"llvm-mca": "install the Debian package llvm (apt-get install llvm)",
+                "arm-none-eabi-objdump": "install the Debian package binutils-arm-none-eabi "
+                                         "(comes with gcc-arm-none-eabi)"}[exe]
+        raise CycleError(f"{exe} not found: {hint}")
+    return found
+
+
+def llvm_mca() -> str:
+    """Path of llvm-mca (PATH, else the newest /usr/lib/llvm-*/bin/llvm-mca)."""
+    return _which("llvm-mca", "/usr/lib/llvm-*/bin/llvm-mca")
+
+
+_TOTAL = re.compile(r"^Total Cycles:\s+(\d+)", re.M)
+_UNSUPPORTED = re.compile(r"note: instruction:\s*(.*)$", re.M)
+
+
+def mca_cycles(asm: list[str] | str) -> int:
+    """llvm-mca's Total Cycles of one iteration of the straight-line block ``asm`` (lines of Thumb-2
+    assembly, unified syntax) on the Cortex-M7 model.  An instruction the model has no data for is
+    replaced by its equivalent (``vcmpe`` -> ``vcmp``; LLVM 14's model has no IT: ``it`` becomes a
+    ``nop`` (one issue slot) and the instructions it makes conditional their unconditional forms, same
+    resources and latencies) or, failing that, CycleError."""
+    lines = asm.splitlines() if isinstance(asm, str) else list(asm)
+    text = "\n".join(_without_it(_substitute(line) for line in lines)) + "\n.Lt:\n"
+    r = subprocess.run([llvm_mca(), *MCA_ARGS], input=text, capture_output=True, text=True, timeout=300)
+    m = _TOTAL.search(r.stdout)
+    if r.returncode != 0 or not m:
+        bad = _UNSUPPORTED.search(r.stderr)
+        raise CycleError("llvm-mca failed" + (f" on {bad.group(1).strip()!r}" if bad else "") +
+                         f": {r.stderr.strip()[:400]}")
+    return int(m.group(1))
+
+
+_IT = re.compile(r"^\s*it([te]{0,3})\s")
+_CONDS = ("eq", "ne", "cs", "hs", "cc", "lo", "mi", "pl", "vs", "vc", "hi", "ls", "ge", "lt", "gt", "le", "al")
+
+
+def _without_it(lines: Iterable[str]) -> Iterator[str]:
+    """IT blocks as a ``nop`` followed by the unconditional forms of their instructions."""
+    pending = 0
+    for line in lines:
+        m = _IT.match(line + " ")
+        if m:
+            pending = 1 + len(m.group(1))
+            yield "\tnop"
+            continue
+        if pending:
+            pending -= 1
+            parts = line.split(None, 1)
+            head, dot, tail = parts[0].partition(".")
+            if head[-2:] in _CONDS:
+                line = "\t" + head[:-2] + dot + tail + ("\t" + parts[1] if len(parts) > 1 else "")
+        yield line
+
+
+def _substitute(line: str) -> str:
+    parts = line.split(None, 1)
+    if parts and parts[0] in _SUBSTITUTES:
+        ops = parts[1] if len(parts) > 1 else ""
+        reg, _, imm = ops.partition(",")
+        if imm.strip().startswith("#"):  # compare with zero: the model has only the register form
+            ops = f"{reg}, {reg.strip()}"
+        return "\t" + _SUBSTITUTES[parts[0]] + ("\t" + ops if ops else "")
+    return line
+
+
+# ---------------------------------------------------------------- disassembly
+
+_OBJ_LINE = re.compile(r"^\s*([0-9a-f]+):\t([^\t]+)(?:\t(.*))?$")
+_TARGET = re.compile(r"\b[0-9a-f]+ <[^>]*>")
+
+
+def disassemble(elf_path: Path) -> dict[int, str]:
+    """Address -> one line of assembly llvm-mca accepts, for every instruction of the image's code:
+    objdump's comments dropped, branch (and ``adr``) targets replaced by the label ``.Lt``."""
+    r = subprocess.run([_which("arm-none-eabi-objdump"), "-d", "--no-show-raw-insn", str(elf_path)],
+                       capture_output=True, text=True, timeout=300)
+    if r.returncode != 0:
+        raise CycleError(f"arm-none-eabi-objdump failed on {elf_path}: {r.stderr.strip()[:300]}")
+    out: dict[int, str] = {}
+    for line in r.stdout.splitlines():
+        m = _OBJ_LINE.match(line)
+        if not m:
+            continue
+        mnemonic, operands = m.group(2).strip(), (m.group(3) or "")
+        if mnemonic.startswith("."):  # .word / .short literal data
+            continue
+        operands, _, comment = operands.partition("@")
+        operands = _TARGET.sub(".Lt", operands.split(";")[0]).strip()
+        if mnemonic.startswith("vmov.f") and "#" in operands and comment.split():
+            # objdump prints a VFP immediate's encoding (#96) and its value in the comment (0.5)
+            operands = operands.split("#")[0] + "#" + comment.split()[-1]
+        if mnemonic.endswith(".w") and re.search(r"\]!$|\], ", operands):
+            mnemonic = mnemonic[:-2]  # pre-/post-indexed writeback: LLVM takes no .w there
+        out[int(m.group(1), 16)] = f"\t{mnemonic}\t{operands}" if operands else f"\t{mnemonic}"
+    return out
+
+
+# ---------------------------------------------------------------- tracing
+
+
+class StepTracer:
+    """The image loaded into unicorn once; :meth:`run` traces one call of ``symbol(&in, &out)``."""
+
+    def __init__(self, elf_path: Path, symbol: str) -> None:
+        try:
+            import unicorn
+            from unicorn import arm_const
+        except ImportError:  # pragma: no cover - a declared dependency
+            raise CycleError("the Python package unicorn is not installed (pip install unicorn)") from None
+        self._uc_mod, self._arm = unicorn, arm_const
+        elf = Elf.read(elf_path)
+        if symbol not in elf.symbols:
+            raise CycleError(f"{elf_path}: no function {symbol}")
+        self.entry = elf.symbols[symbol][0]
+        uc = unicorn.Uc(unicorn.UC_ARCH_ARM, unicorn.UC_MODE_THUMB | unicorn.UC_MODE_MCLASS)
+        uc.ctl_set_cpu_model(arm_const.UC_CPU_ARM_CORTEX_M7)
+        uc.mem_map(_CODE_BASE, _CODE_SIZE)
+        uc.mem_map(_RAM_BASE, _RAM_SIZE)
+        for addr, data, memsz in elf.segments:
+            if not (_CODE_BASE <= addr < _CODE_BASE + _CODE_SIZE or _RAM_BASE <= addr < _IO_BASE):
+                raise CycleError(f"{elf_path}: segment at {addr:#x} outside the qemu-m7 memory map")
+            uc.mem_write(addr, data + bytes(memsz - len(data)))
+        self._ram = bytes(uc.mem_read(_RAM_BASE, _IO_BASE - _RAM_BASE))
+        self._blocks: list[tuple[int, int]] = []
+        uc.hook_add(unicorn.UC_HOOK_BLOCK, lambda _uc, addr, size, _u: self._blocks.append((addr, size)))
+        self.uc = uc
+
+    def run(self, record: bytes, out_size: int, max_instructions: int = 1_000_000) -> tuple[list[tuple[int, int]],
+                                                                                             bytes]:
+        """Executed blocks (address, octets) of one call and the output record's bytes."""
+        uc, a = self.uc, self._arm
+        uc.mem_write(_RAM_BASE, self._ram)  # the step is pure; restore anyway (static scratch)
+        out_addr = _IO_BASE + ((len(record) + 63) & ~63)
+        uc.mem_write(_IO_BASE, bytes(record))
+        uc.mem_write(out_addr, bytes(out_size))
+        uc.reg_write(a.UC_ARM_REG_SP, _STACK_TOP)
+        uc.reg_write(a.UC_ARM_REG_R0, _IO_BASE)
+        uc.reg_write(a.UC_ARM_REG_R1, out_addr)
+        uc.reg_write(a.UC_ARM_REG_LR, _RETURN | 1)
+        self._blocks = []
+        try:
+            uc.emu_start(self.entry | 1, _RETURN, count=max_instructions)
+        except self._uc_mod.UcError as e:
+            raise CycleError(f"unicorn stopped at pc={uc.reg_read(a.UC_ARM_REG_PC):#x}: {e}") from None
+        if uc.reg_read(a.UC_ARM_REG_PC) != _RETURN:
+            raise CycleError(f"the step did not return within {max_instructions} instructions")
+        return self._blocks, bytes(uc.mem_read(out_addr, out_size))
+
+
+# ---------------------------------------------------------------- estimate
+
+
+@dataclass
+class CycleEstimate:
+    """Estimated cycles per step over the traced states (and what the estimate saw)."""
+
+    states: int
+    paths: int
+    cycles: np.ndarray  # per traced state
+    instructions: np.ndarray  # per traced state (executed instructions of the path)
+    mismatches: int = 0
+    distinct: dict[str, int] = field(default_factory=dict)  # path digest -> cycles
+
+    @property
+    def summary(self) -> dict[str, float]:
+        c = self.cycles
+        return {"min": float(c.min()), "median": float(np.median(c)), "max": float(c.max()),
+                "mean": round(float(c.mean()), 1), "instructions_median": float(np.median(self.instructions)),
+                "states": self.states, "paths": self.paths}
+
+
+def _path_lines(blocks: list[tuple[int, int]], addresses: np.ndarray, asm: dict[int, str]) -> list[str]:
+    lines: list[str] = []
+    for start, size in blocks:
+        lo, hi = np.searchsorted(addresses, [start, start + size])
+        if lo == hi or addresses[lo] != start:
+            raise CycleError(f"executed block at {start:#x} does not start at a disassembled instruction")
+        lines.extend(asm[int(x)] for x in addresses[lo:hi])
+    return lines
+
+
+def estimate_cycles(elf_path: Path, symbol: str, states: np.ndarray, expected: np.ndarray | None = None, *,
+                    max_states: int = 256, jobs: int = 4) -> CycleEstimate:
+    """Estimated Cortex-M7 cycles of ``symbol(&in, &out)`` for each of at most ``max_states`` of
+    ``states`` (input records in the step's format, evenly spaced), with ``expected`` the reference's
+    output records (same order) to compare the traced outputs with (a mismatch is a CycleError)."""
+    idx = evenly_spaced(np.arange(len(states)), max_states)
+    tracer = StepTracer(elf_path, symbol)
+    asm = disassemble(elf_path)
+    addresses = np.array(sorted(asm), dtype=np.int64)
+    out_size = expected.dtype.itemsize if expected is not None else 256
+    keys: list[str] = []
+    paths: dict[str, list[str]] = {}
+    n_instr = []
+    mismatches = 0
+    for i in idx:
+        blocks, out = tracer.run(np.ascontiguousarray(states[i:i + 1]).tobytes(), out_size)
+        if expected is not None and out != np.ascontiguousarray(expected[i:i + 1]).tobytes():
+            mismatches += 1
+        key = hashlib.sha1(repr(blocks).encode()).hexdigest()
+        if key not in paths:
+            paths[key] = _path_lines(blocks, addresses, asm)
+        keys.append(key)
+        n_instr.append(len(paths[key]))
+    if mismatches:
+        raise CycleError(f"{symbol}: the traced step's outputs differ from the reference for {mismatches} of "
+                         f"{len(idx)} states")
+    with ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
+        cyc = dict(zip(paths, pool.map(mca_cycles, paths.values())))
+    return CycleEstimate(len(idx), len(paths), np.array([cyc[k] for k in keys], dtype=np.float64),
+                         np.array(n_instr, dtype=np.float64), mismatches, cyc)
+
+
+# ---------------------------------------------------------------- lower bound
+
+#: Cortex-M7 issue limits the bound assumes: one FP instruction per cycle, VSQRT.F32 / VDIV.F32 not
+#: pipelined (14 / 16 cycles each in the divide/square-root unit), one load or store per cycle, at
+#: most two instructions per cycle (dual issue).
+SQRT_CYCLES, DIV_CYCLES, ISSUE_WIDTH = 14, 16, 2
+
+
+def cycle_bound(ops: dict[str, dict[str, int]], n_eval: np.ndarray, n_members: np.ndarray | None = None
+                ) -> np.ndarray:
+    """Per-state lower bound on the step's cycles: the essential operations (``Topology.essential_ops``:
+    per step + ``n_eval`` x per candidate + ``n_members`` x per member) at the core's issue limits,
+    every unit overlapping perfectly: max(FP issue, divider busy, memory, all instructions / 2)."""
+    n_eval = np.asarray(n_eval, dtype=np.float64)
+    n_mem = np.zeros_like(n_eval) if n_members is None else np.asarray(n_members, dtype=np.float64)
+
+    def total(key: str) -> np.ndarray:
+        return (ops["per_step"].get(key, 0) + n_eval * ops["per_candidate"].get(key, 0)
+                + n_mem * ops.get("per_member", {}).get(key, 0))
+
+    fp, sqrt, div = total("fp"), total("sqrt"), total("div")
+    mem = total("load") + total("store")
+    fp_issue = fp + sqrt + div
+    return np.maximum.reduce([fp_issue, SQRT_CYCLES * sqrt + DIV_CYCLES * div, mem,
+                              np.ceil((fp_issue + mem) / ISSUE_WIDTH)])
+
+
+def strategy_cycles(model: Model, tables: Any, elf_path: Path, *, n_bench: int = 2000, max_states: int = 256) -> dict:
+    """Estimate and bound of one strategy's image (``model`` the strategy's variant): the bench
+    states the image embeds (the topology's trajectory, ``n_bench`` evenly spaced, in the step's
+    format), at most ``max_states`` of them traced.  JSON-ready figures."""
+    from codegen.stages.fwdata import expected_outputs, in_step_format, trajectory_states
+    from codegen.topology import topology_of
+
+    topo = topology_of(model)
+    states = in_step_format(model, tables, trajectory_states(model, n_bench))
+    expected = expected_outputs(topo, tables, states)
+    est = estimate_cycles(elf_path, f"{model.prefix}_step", states, expected, max_states=max_states)
+    idx = evenly_spaced(np.arange(len(states)), max_states)
+    names = expected.dtype.names or ()
+    bound = cycle_bound(topo.essential_ops(model, tables), expected["n_eval"][idx],
+                        expected["n_members"][idx] if "n_members" in names else None)
+    s = est.summary
+    return {"min": s["min"], "median": s["median"], "max": s["max"], "mean": s["mean"],
+            "path_instructions_median": s["instructions_median"], "states": s["states"], "paths": s["paths"],
+            "bound_median": float(np.median(bound)), "bound_min": float(bound.min()),
+            "bound_max": float(bound.max()), "est_over_bound": s["median"] / float(np.median(bound))}

@@ -1,0 +1,47 @@
+"""Essential operations of the two-level step, counted from its algorithm (``reference.py``), for the
+cycle lower bound of ``mpcgen bench --emulated`` (``codegen.stages.cycles_bound``).
+
+Counts, not measurements: the FP operations (add, sub, mul, abs, compare,
+convert, select), square roots, divisions, loads (inputs, constants, table
+cells) and stores (outputs) the algorithm cannot do without, per step and per
+evaluated candidate (``n_eval``).  Float32 names; a fixed-point step does the
+same operations on integers.
+"""
+from __future__ import annotations
+
+from typing import Any
+
+#: sin/cos: range reduction (8), odd polynomial (7), even polynomial (8), quadrant select (4)
+SINCOS_FP, SINCOS_LOADS = 27, 9
+#: input guard: |ia|, |ib|, |ic| (ic = -ia - ib), theta, omega, udc low/high, their compares
+GUARD_FP = 11
+
+
+def essential_ops(tables: Any) -> dict[str, dict[str, int]]:
+    """``{"per_step": counts, "per_candidate": counts, "per_member": counts}``, counts with keys
+    ``fp``, ``sqrt``, ``div``, ``load``, ``store``."""
+    geo = tables.predictor == "flux-geometry"
+    fp = GUARD_FP + SINCOS_FP + 3 + 6 + 3  # guard, sin/cos, Clarke, Park, dq flux
+    if geo:
+        fp += 6 + 2 + 1 + 4 + 3  # inverse Park, psi_f (cos, sin), U_dc dt, torque, |psi|^2
+        fp += 4 if tables.delay_compensation else 0
+    else:
+        fp += 1 + 2 + 3 + 4 + 3 + 6 + 6  # |V|, V cos/sin, flux, torque, |psi|^2, inverse Park, Euler bases
+        fp += 8 + 3 if tables.delay_compensation else 0
+    if getattr(tables, "psi_ref", "constant") != "constant":
+        fp += 3 + 1  # flux reference from the torque reference (table slope) and its inverse
+    if tables.uses_threshold:
+        fp += 3  # |T* - Te| <= eps
+        if tables.n_sectors > 1:
+            fp += 6 + (1 if tables.n_conditions == 2 else 2)  # 12-sector test, condition signs
+    per_cand_fp = 4 + 4 + 3 + 7 + 1  # flux predictor, torque, |psi|^2, cost, compare with the best
+    if getattr(tables, "cost", "rated") != "rated":
+        per_cand_fp += 1
+    if not geo:
+        per_cand_fp = 9 + 3 + 4 + 3 + 7 + 1  # Euler current step, flux, torque, |psi|^2, cost, compare
+    n_const = 14 + SINCOS_LOADS
+    return {
+        "per_step": {"fp": fp, "sqrt": 1, "div": 0, "load": 6 + n_const + 1, "store": 14},
+        "per_candidate": {"fp": per_cand_fp, "sqrt": 1, "div": 0, "load": 3, "store": 2},
+        "per_member": {"fp": 0, "sqrt": 0, "div": 0, "load": 0, "store": 0},
+    }

@@ -1,0 +1,100 @@
+"""The cycle estimate's pipeline model and tracer against cases counted by hand (codegen.stages.cycles)."""
+from __future__ import annotations
+
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from codegen.stages import cycles
+
+needs_mca = pytest.mark.skipif(shutil.which("llvm-mca") is None, reason="llvm-mca (Debian llvm) not installed")
+needs_gcc = pytest.mark.skipif(shutil.which("arm-none-eabi-gcc") is None, reason="arm-none-eabi-gcc not installed")
+
+
+@needs_mca
+@pytest.mark.parametrize("n", [4, 16])
+def test_dependent_vadd_chain_is_three_cycles_each(n):
+    # Cortex-M7 VADD.F32 latency 3: a chain of N dependent adds takes about 3N cycles
+    c = cycles.mca_cycles(["\tvadd.f32\ts0, s0, s1"] * n)
+    assert 3 * n <= c <= 3 * n + 3
+
+
+@needs_mca
+def test_vsqrt_then_dependent_use():
+    # VSQRT.F32 ~14 cycles, then a dependent VADD (3)
+    c = cycles.mca_cycles(["\tvsqrt.f32\ts0, s1", "\tvadd.f32\ts2, s0, s1"])
+    assert 14 + 3 <= c <= 14 + 3 + 2
+
+
+@needs_mca
+def test_independent_operations_dual_issue():
+    # two integer ALU operations (or a load and an ALU operation) per cycle when independent
+    independent = [f"\tadd.w\tr{r}, r1, #{r}" for r in (0, 2, 3, 4)]
+    assert cycles.mca_cycles(independent) <= 3
+    assert cycles.mca_cycles(["\tadd.w\tr0, r0, #1"] * 4) >= 4
+    assert cycles.mca_cycles(["\tvldr\ts0, [r0]", "\tadd.w\tr2, r1, #2", "\tvldr\ts1, [r0, #4]",
+                              "\tadd.w\tr4, r1, #2"]) <= 3
+    # independent FP operations issue one per cycle (the last result 3 cycles later), a chain waits
+    fp = [f"\tvadd.f32\ts{d}, s2, s3" for d in (0, 4, 5, 6)]
+    assert cycles.mca_cycles(fp) <= 4 + 3
+    assert cycles.mca_cycles(["\tvadd.f32\ts0, s0, s3"] * 4) >= 4 * 3
+
+
+@needs_mca
+def test_objdump_forms_the_model_lacks_are_substituted():
+    # IT blocks, vcmpe, compare with zero, VFP immediates, writeback with .w
+    block = ["\tvcmpe.f32\ts13, s15", "\tvcmp.f32\ts11, #0", "\tvmrs\tAPSR_nzcv, fpscr", "\tit\thi",
+             "\torrhi.w\tr3, r3, #8", "\tite\tge", "\tmovge\tr0, r1", "\tmovlt\tr0, r2", "\tbhi.n\t.Lt",
+             "\tldrh\tr7, [r4], #2", "\tvmov.f32\ts5, #0.5"]
+    assert cycles.mca_cycles(block) > 0
+
+
+@needs_mca
+def test_lower_bound_counts():
+    ops = {"per_step": {"fp": 10, "sqrt": 0, "div": 0, "load": 4, "store": 0},
+           "per_candidate": {"fp": 5, "sqrt": 1, "div": 0, "load": 2, "store": 0},
+           "per_member": {"fp": 0, "sqrt": 0, "div": 0, "load": 0, "store": 0}}
+    b = cycles.cycle_bound(ops, np.array([0, 7]))
+    assert b[0] == 10  # FP issue
+    assert b[1] == 14 * 7  # the square-root unit
+
+
+SOURCE = """
+float chain(const float *in, float *out)
+{
+    float x = in[0];
+    int n = (int)in[3];
+    for (int i = 0; i < n; ++i) { x = x * in[1] + in[2]; }
+    x = __builtin_sqrtf(x);
+    out[0] = x;
+    return x;
+}
+void _start(void) { for (;;) {} }
+"""
+
+
+@needs_mca
+@needs_gcc
+def test_trace_a_small_function(tmp_path: Path):
+    src = tmp_path / "f.c"
+    src.write_text(SOURCE)
+    elf = tmp_path / "f.elf"
+    subprocess.run(["arm-none-eabi-gcc", "-mcpu=cortex-m7", "-mthumb", "-mfpu=fpv5-d16", "-mfloat-abi=hard", "-O2",
+                    "-ffp-contract=off", "-fno-math-errno", "-nostdlib", "-Wl,-Ttext=0x100", "-Wl,-Tdata=0x20000000",
+                    str(src), "-o", str(elf)], check=True)
+    states = np.array([[2.0, 1.5, 0.25, 3.0], [2.0, 1.5, 0.25, 8.0]], dtype=np.float32)
+    tracer = cycles.StepTracer(elf, "chain")
+    blocks, out = tracer.run(states[0].tobytes(), 4)
+    x = np.float32(2.0)
+    for _ in range(3):
+        x = np.float32(np.float32(x * np.float32(1.5)) + np.float32(0.25))
+    assert np.frombuffer(out, np.float32)[0] == np.sqrt(x)
+    est = cycles.estimate_cycles(elf, "chain", states, None)
+    assert est.states == 2 and est.paths == 2  # 3 and 8 loop iterations
+    # five more dependent multiply-add pairs (3 + 3 cycles each) on the longer path
+    assert est.cycles[1] - est.cycles[0] >= 5 * 6
+    # at least the square root and the chain: 14 + 3 x 6
+    assert est.cycles[0] >= 14 + 3 * 6
