@@ -40,9 +40,11 @@ class ThreeLevelTables(HasConsts):
     strategy: str  # 'mpdtc27' | 'mpdtc63'
     consts: tuple[Const, ...]
     # per state (27): neutral-point coefficients i_o = ka i_a + kb i_b + kc i_c
-    io_a: tuple[np.generic, ...]
-    io_b: tuple[np.generic, ...]
-    io_c: tuple[np.generic, ...]
+    #: midpoint-current pattern of each state: p = 4 ka + 2 kb + kc, i_o = ka i_a + kb i_b + kc i_c
+    #: with (ka, kb, kc) in {0, 1}^3 (eq. (2) corrected); only the 8 values i_o(p) exist per step
+    io_pattern: tuple[int, ...]
+    #: patterns of each vector's segments [N, b, c, P] (a basic vector: its state's, four times)
+    seq_pat: tuple[tuple[int, ...], ...]
     # per vector id (63): period-average voltage / Udc, virtual flag, 7 states
     ux: tuple[np.generic, ...]
     uy: tuple[np.generic, ...]
@@ -145,6 +147,14 @@ def cost_bounds(model: Model) -> list[Signal]:
     return [Signal("g (cost, eq. (7))", "N*m", g, "controller.lambda_psi_nm_per_wb")]
 
 
+def io_patterns() -> tuple[int, ...]:
+    """Midpoint-current pattern p = 4 ka + 2 kb + kc of each state (eq. (2) corrected); ValueError if a
+    coefficient is not 0 or 1."""
+    if any(k not in (0, 1) for s in v.STATES for k in s.io):
+        raise ValueError("midpoint coefficients must be 0 or 1")
+    return tuple(4 * int(s.io[0]) + 2 * int(s.io[1]) + int(s.io[2]) for s in v.STATES)
+
+
 def _label_63(p: int, k: int) -> str:
     row = cd.derive_candidate_table().row(p, k)
     s = f"prev {v.STATES[p].name}, sector {cd.SECTOR_NAMES[k]}"
@@ -193,6 +203,7 @@ def derive_three_level(model: Model) -> ThreeLevelTables:
     ux, uy = vv.vector_voltages()
     nf, consts = step_format(model, _constants(model), cost_bounds(model))
     f = nf.const
+    pat = io_patterns()
     seq = []
     for i in range(vv.N_VECTORS):
         seq.append(vv.virtual_of(i).sequence if vv.is_virtual(i) else (i,) * 7)
@@ -200,9 +211,8 @@ def derive_three_level(model: Model) -> ThreeLevelTables:
         prefix=model.prefix,
         strategy=strategy,
         consts=consts,
-        io_a=tuple(f(s.io[0]) for s in v.STATES),
-        io_b=tuple(f(s.io[1]) for s in v.STATES),
-        io_c=tuple(f(s.io[2]) for s in v.STATES),
+        io_pattern=pat,
+        seq_pat=tuple(tuple(pat[s] for s in sq[:4]) for sq in seq),
         ux=tuple(f(x) for x in ux),
         uy=tuple(f(y) for y in uy),
         is_virtual=tuple(int(vv.is_virtual(i)) for i in range(vv.N_VECTORS)),

@@ -35,7 +35,10 @@ Step (mpdtc-three-level.md; equation numbers are seed 000's):
        Q(T_N) = Ts/3 (i_o(b) + i_o(c) + i_o(P)) + T_N (i_o(N) - i_o(P)),
        V_o(k+1) + Q(T_N)/(2C) = 0  ->  T_N = -(2C V_o(k+1) + Ts/3 A)/D,
    one IEEE float32 division (D == 0: T_N = T_N_min), clamped to
-   [T_N_min, Ts/3].
+   [T_N_min, Ts/3].  The 8 distinct i_o values (patterns of the 0/1
+   coefficients, ``ThreeLevelTables.seq_pat``) are computed once per step with the
+   coefficient formula's bits and indexed per vector; 27-MPDTC (every member
+   basic) also takes |V_o(k+2)| once per pattern.
 6. cost (eq. (7)) of the resolved member, Euler step k+1 -> k+2 with the
    voltage rotated by theta(k+1):
        g = |T* - Te| + lambda1 |psi* - psi_s| + lambda2 |V_o(k+2)|;
@@ -73,21 +76,34 @@ class _Midpoint:
 
     def __init__(self, o: Ops, t: ThreeLevelTables, k: Constants) -> None:
         self.o, self.k = o, k
-        self.ka, self.kb, self.kc = o.array(t.io_a), o.array(t.io_b), o.array(t.io_c)
+        self.seq_pat = np.array(t.seq_pat, np.intp)
 
-    def io(self, s: np.ndarray, a: Any, b: Any, c: Any) -> Any:
-        """i_o = sum_x (1 - |S_x|) i_x of state s."""
-        o = self.o
-        r = o.add(o.mul(self.ka[s], a), o.mul(self.kb[s], b))
-        return o.add(r, o.mul(self.kc[s], c))
+    def patterns(self, a: Any, b: Any, c: Any) -> np.ndarray:
+        """The 8 distinct i_o(p) = (ka i_a + kb i_b) + kc i_c, p = 4 ka + 2 kb + kc, shape (8, n).
 
-    def parts(self, sq: np.ndarray, a: Any, b: Any, c: Any) -> tuple[Any, Any, Any]:
-        """(i_o(N), A = i_o(b) + i_o(c) + i_o(P), D = i_o(N) - i_o(P)) of sequences sq [N, b, c, P, ...]."""
+        The C's order: a product by 1 is the current itself (exact), one by 0 is ``0 i_x`` (a zero
+        of the current's sign, as the coefficient product gives), the two sums as per state."""
         o = self.o
-        o_n = self.io(sq[:, 0], a, b, c)
-        o_b = self.io(sq[:, 1], a, b, c)
-        o_c = self.io(sq[:, 2], a, b, c)
-        o_p = self.io(sq[:, 3], a, b, c)
+        z = o.const(0.0)
+        za, zb, zc = o.mul(z, a), o.mul(z, b), o.mul(z, c)
+        s00, s01, s10, s11 = o.add(za, zb), o.add(za, b), o.add(a, zb), o.add(a, b)
+        vals = []
+        for s_ab in (s00, s01, s10, s11):
+            vals += [o.add(s_ab, zc), o.add(s_ab, c)]
+        return np.stack([np.broadcast_to(v, np.shape(a)) for v in vals])
+
+    @staticmethod
+    def pick(table: np.ndarray, p: np.ndarray) -> Any:
+        """Per lane, the entry of pattern p (table shape (8, n))."""
+        return table[p, np.arange(table.shape[1])]
+
+    def parts(self, iop: np.ndarray, v: np.ndarray) -> tuple[Any, Any, Any]:
+        """(i_o(N), A = i_o(b) + i_o(c) + i_o(P), D = i_o(N) - i_o(P)) of vectors v, sequences [N, b, c, P, ...]."""
+        o, sp = self.o, self.seq_pat[v]
+        o_n = self.pick(iop, sp[:, 0])
+        o_b = self.pick(iop, sp[:, 1])
+        o_c = self.pick(iop, sp[:, 2])
+        o_p = self.pick(iop, sp[:, 3])
         sa = o.add(o_b, o_c)
         sa = o.add(sa, o_p)
         return o_n, sa, o.sub(o_n, o_p)
@@ -136,7 +152,8 @@ def _step(t: ThreeLevelTables, x: np.ndarray) -> np.ndarray:
     vs0 = o.mul(udc, s0)
     bd0, bq0 = dq.bases(o, model, om, i_d, i_q)
     i_d1, i_q1 = dq.advance(o, model, bd0, bq0, vc0, vs0, ux[pv], uy[pv])
-    o_n, sa, d = mid.parts(seq[pv], ia, ib, ic)
+    io0 = mid.patterns(ia, ib, ic)
+    o_n, sa, d = mid.parts(io0, pv)
     q = mid.charge(is_virt[pv], o_n, sa, d, tnp)
     vo1 = o.add(vo, o.mul(k.K_VO, q))
 
@@ -160,6 +177,9 @@ def _step(t: ThreeLevelTables, x: np.ndarray) -> np.ndarray:
     sec = sector12(o, ua, ub, k.TAN30, k.TAN60).astype(np.intp)
     # phase currents at k+1 (inverse Clarke)
     ia1, ib1, ic1 = frames.inv_clarke(o, i1a, i1b, k.SQRT3_2, k.HALF)
+    io1 = mid.patterns(ia1, ib1, ic1)
+    if t.n_sectors == 1:  # 27-MPDTC, every member basic: |V_o(k+2)| = |V_o(k+1) + K_VO Ts i_o(p)| per pattern
+        av_pat = np.stack([o.abs(o.add(vo1, o.mul(k.K_VO, o.mul(k.TS_S, io1[p])))) for p in range(8)])
     vc1 = o.mul(udc, c1)
     vs1 = o.mul(udc, s1)
     bd1, bq1 = dq.bases(o, model, om, i_d1, i_q1)
@@ -193,8 +213,11 @@ def _step(t: ThreeLevelTables, x: np.ndarray) -> np.ndarray:
                 continue
             v = groups[g, mi]
             virt = is_virt[v]
-            if virt.any():
-                o_n, sa, d = mid.parts(seq[v], ia1, ib1, ic1)
+            if t.n_sectors == 1:  # the pattern's |V_o(k+2)|, T_N = 0
+                av = mid.pick(av_pat, mid.seq_pat[v, 0])
+                tn = o.zeros(n)
+            elif virt.any():
+                o_n, sa, d = mid.parts(io1, v)
                 # neutral-point deadbeat T_N = -(2C V_o(k+1) + Ts/3 A)/D, clamped to [T_N_min, Ts/3]
                 num = o.mul(vo1, k.TWO_C)
                 num = o.add(num, o.mul(k.TS3_S, sa))
@@ -204,12 +227,13 @@ def _step(t: ThreeLevelTables, x: np.ndarray) -> np.ndarray:
                 tn = o.where(o.gt(tn, k.TS3_S), k.TS3_S, tn)
                 q = mid.charge(virt, o_n, sa, d, tn)
                 tn = o.where(virt, tn, zf)
-            else:  # basic members only (27-MPDTC): the charge Ts i_o(s) of mid.charge, T_N = 0
-                o_n = mid.io(seq[v][:, 0], ia1, ib1, ic1)
+            else:  # basic members only: the charge Ts i_o(s) of mid.charge, T_N = 0
+                o_n = mid.pick(io1, mid.seq_pat[v, 0])
                 q = o.mul(k.TS_S, o_n)
                 tn = o.zeros(n)
-            vo2 = o.add(vo1, o.mul(k.K_VO, q))
-            av = o.abs(vo2)
+            if t.n_sectors != 1:
+                vo2 = o.add(vo1, o.mul(k.K_VO, q))
+                av = o.abs(vo2)
             take = m_act & ((mi == 0) | o.lt(av, m_av))
             m_av = o.where(take, av, m_av)
             m_v = np.where(take, v, m_v)

@@ -36,9 +36,11 @@ def three_level_context(model: Model, t: ThreeLevelTables, target: str) -> dict:
         if vv.is_virtual(i):
             label += " " + vv.virtual_of(i).sequence_names()
         seq.append(TableRow(tuple(s), label))
+    seq_pat = [TableRow(p, f"{r.label}: " + (" ".join(f"{x:03b}" for x in p) if vv.is_virtual(i) else f"{p[0]:03b}"))
+               for i, (p, r) in enumerate(zip(t.seq_pat, seq))]
     return step_context(model, target, (INPUT, OUTPUT), FAULT_BITS, **{
         **table_fields(t), "topology_macro": "MPC_TOPOLOGY_THREE_LEVEL", "guard": GUARD, "dq": DQ,
-        "first_virtual": FIRST_VIRTUAL, "seq": seq, "groups": groups, "group_n": t.group_n,
+        "first_virtual": FIRST_VIRTUAL, "seq": seq, "seq_pat": seq_pat, "groups": groups, "group_n": t.group_n,
         "max_members": mm, "rows": rows, "row_n": t.row_n, "max_groups": mg, "n_segments": N_SEGMENTS,
         "n_max_eval": N_MAX_EVAL, "safe_state": SAFE_STATE})
 

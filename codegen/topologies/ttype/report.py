@@ -11,7 +11,7 @@ def table_bytes(t: ThreeLevelTables) -> dict[str, int]:
     """Bytes of read-only data the step's tables take (uint16 = 2, float = 4)."""
     n_vec = len(t.ux)
     out = {
-        "io_a, io_b, io_c (float)": 3 * len(t.io_a) * 4,
+        "seq_pat (uint16)": len(t.seq_pat) * 4 * 2,
         "ux, uy (float)": 2 * n_vec * 4,
         "seq (uint16)": n_vec * 7 * 2,
         "group_n, group_members (uint16)": len(t.groups) * (1 + t.max_members) * 2,

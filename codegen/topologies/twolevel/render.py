@@ -25,7 +25,8 @@ def two_level_context(model: Model, t: TwoLevelTables, target: str) -> dict:
     ]
     return step_context(model, target, (INPUT, OUTPUT), FAULT_BITS, **{
         **table_fields(t), "topology_macro": "MPC_TOPOLOGY_TWO_LEVEL", "guard": GUARD, "dq": DQ,
-        "rows_padded": rows, "row_len": t.row_len, "n_vectors": N_VECTORS})
+        "rows_padded": rows, "row_len": t.row_len,
+        "max_row_len": max(t.row_len), "min_row_len": min(t.row_len), "n_vectors": N_VECTORS})
 
 
 def render_two_level(model: Model, t: TwoLevelTables, target: str) -> dict[str, str]:

@@ -185,7 +185,7 @@ def test_reference_cost_ranks_as_eq5() -> None:
     candidates' predicted Te and flux error are recovered in float64 from rated costs (C1) at two
     torque references (the predictions do not depend on T*), eq. (5) is evaluated from them, and its
     ranking and values are compared with the step's reference costs (float32, constant psi*)."""
-    m = _model("seed001_ipmsm", cost="reference")
+    m = _model("seed001_ipmsm", cost="reference", psi_ref="constant")  # the example itself uses MTPA
     t, rated = derive_two_level(m), derive_two_level(m.with_controller(cost="rated"))
     x = _states(m, 4000, 11)
     t_n, t_a = m.motor.rated_torque_nm, 8.0
