@@ -248,7 +248,14 @@ def cmd_report(args: argparse.Namespace) -> int:
 def cmd_sweep(args: argparse.Namespace) -> int:
     from codegen.stages import sweep
 
-    return sweep.command(args, _load(args), _log(args.quiet))
+    outputs = {k: cliargs.output_file(f"--{k}", getattr(args, k)) for k in ("json", "csv", "plot")}
+    plot = outputs["plot"]
+    if plot is not None and plot.suffix.lower() != ".png":
+        raise UsageError(f"--plot = {plot}: the plot is written as PNG; give a file name ending in .png")
+    cliargs.at_least("--monte-carlo", args.monte_carlo, 0)
+    cliargs.at_least("--seed", args.seed, 0)
+    model = _load(args)
+    return sweep.command(args, model, _log(args.quiet), _strategies(args, model), outputs)
 
 
 def build_parser() -> argparse.ArgumentParser:

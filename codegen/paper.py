@@ -8,9 +8,23 @@ the paper draws is ``{"name", "published", "ours"}`` in percent.
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, NamedTuple
 
-__all__ = ["side", "percent", "pair_cell", "pct_cell", "no_figures", "pair_head"]
+__all__ = ["SeedMotor", "side", "percent", "pair_cell", "pct_cell", "no_figures", "pair_head"]
+
+
+
+class SeedMotor(NamedTuple):
+    """A seed paper's motor, as published (rated values where the paper gives them): a config runs
+    the paper's case, and the published figures apply, only with these parameters."""
+
+    rs_ohm: float
+    ld_h: float
+    lq_h: float
+    psi_f_wb: float
+    pole_pairs: int
+    rated_speed_rpm: float | None = None
+    rated_torque_nm: float | None = None
 
 
 def _num(v: Any) -> float | None:

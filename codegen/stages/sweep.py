@@ -41,7 +41,6 @@ import numpy as np
 from codegen.config import INT, REAL, SCHEMA, load_config, parse_override
 from codegen.errors import ConfigError, UsageError
 from codegen.model import Model
-from codegen.topology import topology_of
 
 __all__ = ["Axis", "Spread", "Plan", "parse_param", "parse_spread", "build_plan", "command",
            "MAX_AXIS_VALUES", "MAX_RUNS"]
@@ -237,8 +236,8 @@ def base_overrides(args: argparse.Namespace) -> dict[str, object]:
 def build_plan(config: str, model: Model, base: dict[str, object], strategies: list[str],
                params: list[str], spreads: list[str], monte_carlo: int, seed: int) -> Plan:
     """Parse the axes and spreads, draw the Monte Carlo values and load every run's config."""
-    _at_least("--monte-carlo", monte_carlo, 0)
-    _at_least("--seed", seed, 0)
+    if monte_carlo < 0 or seed < 0:
+        raise UsageError(f"--monte-carlo = {monte_carlo}, --seed = {seed}: must be integers >= 0")
     axes = [parse_param(t) for t in params]
     sp = [parse_spread(t) for t in spreads]
     if not axes and not monte_carlo:
@@ -289,59 +288,14 @@ def check_runs(plan: Plan, log: Log) -> None:
     log(f"sweep: {len(plan.runs)} run configs checked in {time.perf_counter() - t0:.2f} s")
 
 
-def _at_least(option: str, value: int, lowest: int) -> int:
-    if value < lowest:
-        raise UsageError(f"{option} = {value}: must be an integer >= {lowest}")
-    return value
-
-
-def _output_file(option: str, path: str | None) -> Path | None:
-    """A file the sweep may write (its folder created if missing); checked by opening it for appending."""
-    if path is None:
-        return None
-    f = Path(path)
-    if f.is_dir():
-        raise UsageError(f"{option} = {f}: is a folder; give a file name")
-    try:
-        f.parent.mkdir(parents=True, exist_ok=True)
-        existed = f.exists()
-        with open(f, "a"):
-            pass
-    except OSError as exc:
-        raise UsageError(f"{option} = {f}: cannot write the file ({exc.strerror or exc})") from None
-    if not existed:
-        f.unlink()
-    return f
-
-
-def _strategies(text: str | None, model: Model) -> list[str]:
-    family = topology_of(model).strategies
-    if text is None:
-        return list(family)
-    chosen = [s.strip() for s in text.split(",") if s.strip()]
-    bad = [s for s in chosen if s not in family] or ([] if chosen else [text])
-    if bad:
-        raise UsageError(f"--strategies: '{bad[0]}' is not a strategy of a {model.inverter.topology} inverter; "
-                         f"allowed: {', '.join(family)}")
-    return list(dict.fromkeys(chosen))
-
-
-def _check_outputs(args: argparse.Namespace) -> dict[str, Path | None]:
-    out = {"json": _output_file("--json", args.json), "csv": _output_file("--csv", args.csv),
-           "plot": _output_file("--plot", args.plot)}
-    if out["plot"] is not None and out["plot"].suffix.lower() != ".png":
-        raise UsageError(f"--plot = {out['plot']}: the plot is written as PNG; give a file name ending in .png")
-    return out
-
-
 # ---------------------------------------------------------------- command
-def command(args: argparse.Namespace, model: Model, log: Log) -> int:
-    """``mpcgen sweep``: check everything, run the plan (Dask or serial), write JSON, CSV and the plot."""
+def command(args: argparse.Namespace, model: Model, log: Log, strategies: list[str],
+            outputs: dict[str, Path | None]) -> int:
+    """``mpcgen sweep``: check everything, run the plan (Dask or serial), write JSON, CSV and the plot
+    (``strategies`` and the output files ``outputs`` "json", "csv", "plot" checked by the command line)."""
     from codegen.stages import sweep_output, sweep_runner
 
-    outputs = _check_outputs(args)
     runner = sweep_runner.check_runner_args(args.serial, args.scheduler, args.workers)
-    strategies = _strategies(args.strategies, model)
     plan = build_plan(args.config, model, base_overrides(args), strategies, args.param, args.spread,
                       args.monte_carlo, args.seed)
     check_runs(plan, log)

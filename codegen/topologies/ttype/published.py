@@ -21,6 +21,7 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
+from codegen.paper import SeedMotor
 from codegen.texttable import records, split_rows
 
 
@@ -124,16 +125,6 @@ PUBLISHED_GROUP_COUNTS: tuple[int, ...] = (3, 5, 6, 7)
 # ---------------------------------------------------------------------------
 # Table 4: the experiment's motor (表4 电机参数) and section 3's operating points.
 # ---------------------------------------------------------------------------
-class SeedMotor(NamedTuple):
-    rs_ohm: float
-    ld_h: float
-    lq_h: float
-    psi_f_wb: float
-    pole_pairs: int
-    rated_speed_rpm: float
-    rated_torque_nm: float
-
-
 TABLE4_MOTOR = SeedMotor(1.75, 1.6e-3, 1.6e-3, 0.045, 5, 3000.0, 1.27)
 #: section 3 / 3.1: Udc = 220 V, control period 50 us, steady runs at rated load 1.27 N*m
 UDC_V = 220.0

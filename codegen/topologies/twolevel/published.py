@@ -20,6 +20,7 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
+from codegen.paper import SeedMotor
 from codegen.texttable import int_cells, number_rows, numbers, records, split_rows
 
 Cell = tuple[int, ...]
@@ -226,14 +227,6 @@ TABLE9_ZERO_VECTOR_PERCENT: tuple[tuple[str, float], ...] = records(lambda s, p:
 # section 6: IPMSM, Table 9).  Used to tell whether a config runs the
 # paper's case (its published figures apply) or another one.
 # ---------------------------------------------------------------------------
-class SeedMotor(NamedTuple):
-    rs_ohm: float
-    ld_h: float
-    lq_h: float
-    psi_f_wb: float
-    pole_pairs: int
-
-
 # Section 3 text (仿真用表面式永磁同步电机参数): 4 s, 80 000 samples of 50 us,
 # 500 -> -500 r/min at 2 s, load 10 / -10 (1 s) / 10 (3 s) N*m.
 SPMSM_MOTOR = SeedMotor(0.2, 0.0085, 0.0085, 0.175, 4)
