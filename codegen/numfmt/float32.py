@@ -56,15 +56,15 @@ class Float32Ops:
 
     def const(self, x: float) -> np.float32:
         """A literal value of the format (rounded once)."""
-        return np.float32(x)
+        return self.real(x)
 
     def array(self, values: Any) -> np.ndarray:
         """An array of values of the format (table data already in the format)."""
-        return np.asarray(values, dtype=np.float32)
+        return np.asarray(values, dtype=self.real)
 
     def zeros(self, shape: Any) -> np.ndarray:
         """Zeros of the format."""
-        return np.zeros(shape, np.float32)
+        return np.zeros(shape, self.real)
 
     def add(self, a: Any, b: Any) -> Any:
         """a + b, one rounding."""
@@ -120,11 +120,11 @@ class Float32Ops:
 
     def where(self, cond: Any, a: Any, b: Any) -> np.ndarray:
         """Per lane: a where cond, else b (a selection, no arithmetic)."""
-        return np.where(cond, a, b).astype(np.float32)
+        return np.where(cond, a, b).astype(self.real)
 
     def select(self, conds: list[Any], choices: list[Any], default: Any) -> np.ndarray:
         """Per lane: the first choice whose condition holds, else default."""
-        return np.select(conds, choices, default).astype(np.float32)
+        return np.select(conds, choices, default).astype(self.real)
 
     def trunc_int(self, a: Any) -> np.ndarray:
         """Conversion to int32 by truncation toward zero (C's ``(int32_t)x``)."""
@@ -132,7 +132,7 @@ class Float32Ops:
 
     def from_int(self, n: Any) -> np.ndarray:
         """Conversion of an integer to the format (C's ``(float)n``)."""
-        return np.asarray(n).astype(np.float32)
+        return np.asarray(n).astype(self.real)
 
 
 @dataclass(frozen=True)
@@ -152,13 +152,13 @@ class Float32:
     angle_guard_rad: float = 256.0
 
     def const(self, x: float, unit: str = "") -> np.float32:
-        return f32(x)
+        return self.real_dtype.type(x)  # type: ignore[no-any-return]
 
     def encode(self, unit: str, x: Any) -> np.ndarray:
-        return np.asarray(x, np.float64).astype(np.float32)
+        return np.asarray(x, np.float64).astype(self.real_dtype)
 
     def decode(self, unit: str, n: Any) -> np.ndarray:
-        return np.asarray(n, np.float32).astype(np.float64)
+        return np.asarray(n, self.real_dtype).astype(np.float64)
 
     def scaled(self, scaling: Any) -> Float32:
         return self

@@ -9,12 +9,11 @@ the fixed-point step does.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 
 from .fixed import FIXED
-from .float32 import Float32Ops
+from .float32 import Float32, Float32Ops
 
 __all__ = ["Float64Ops", "Float64", "FLOAT64"]
 
@@ -24,28 +23,11 @@ class Float64Ops(Float32Ops):
 
     real = np.float64  # type: ignore[assignment]
 
-    def const(self, x: float) -> np.float64:  # type: ignore[override]
-        return np.float64(x)
-
-    def array(self, values: Any) -> np.ndarray:
-        return np.asarray(values, dtype=np.float64)
-
-    def zeros(self, shape: Any) -> np.ndarray:
-        return np.zeros(shape, np.float64)
-
-    def where(self, cond: Any, a: Any, b: Any) -> np.ndarray:
-        return np.where(cond, a, b).astype(np.float64)
-
-    def select(self, conds: list[Any], choices: list[Any], default: Any) -> np.ndarray:
-        return np.select(conds, choices, default).astype(np.float64)
-
-    def from_int(self, n: Any) -> np.ndarray:
-        return np.asarray(n).astype(np.float64)
-
 
 @dataclass(frozen=True)
-class Float64:
-    """An analysis-only float64 backend of :class:`codegen.numfmt.NumberFormat` (no C spelling)."""
+class Float64(Float32):
+    """An analysis-only float64 backend of :class:`codegen.numfmt.NumberFormat` (no C spelling): the
+    float32 backend with float64 storage and operations."""
 
     name: str = "float64"
     real_dtype: np.dtype = np.dtype(np.float64)
@@ -55,27 +37,8 @@ class Float64:
     value_kind: str = "MPC_VALUE_F64"
     value_reader: str = ""
     ops: Float64Ops = field(default_factory=Float64Ops)
-    scaling: Any = None
     #: the fixed-point step's angle guard, so the ideal trips where the fixed step does
     angle_guard_rad: float = FIXED.angle_guard_rad
-
-    def const(self, x: float, unit: str = "") -> np.float64:
-        return np.float64(x)
-
-    def encode(self, unit: str, x: Any) -> np.ndarray:
-        return np.asarray(x, np.float64)
-
-    def decode(self, unit: str, n: Any) -> np.ndarray:
-        return np.asarray(n, np.float64)
-
-    def scaled(self, scaling: Any) -> Float64:
-        return self
-
-    def template_values(self) -> dict[str, object]:
-        return {}
-
-    def for_step(self, signals: list[Any], base: Any, global_q: int | None) -> Float64:
-        return self
 
     def literal(self, x: float | np.generic) -> str:
         return repr(float(x))  # type: ignore[arg-type]
