@@ -117,7 +117,8 @@ class NumberFormat(Protocol):
         ...
 
     def template_values(self) -> dict[str, object]:
-        """Values the format's macro library reads from the template context."""
+        """Values the format's macro library and the step templates read from the template context
+        (every format gives ``interleave``: the independent chains worth interleaving in a step)."""
         ...
 
     def for_step(self, signals: list[Any], base: Any, global_q: int | None) -> NumberFormat:

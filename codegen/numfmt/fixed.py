@@ -192,7 +192,8 @@ class Fixed:
 
     def template_values(self) -> dict[str, object]:
         sc = self._sc()
-        return {"q_frac_bits": sc.frac_bits,
+        return {"interleave": 1,  # the int64 helpers gain nothing from interleaved chains (more spills)
+                "q_frac_bits": sc.frac_bits,
                 "q_lits": {"0": "INT32_C(0)", "0.5": self.literal(sc.const(0.5, "")),
                            "1": self.literal(sc.const(1.0, ""))}}
 

@@ -43,6 +43,11 @@ def c_float_literal(x: float | np.floating) -> str:
     return f"{mant}p{exp}f"
 
 
+#: independent operation chains a step interleaves statement by statement: pipelined FPU
+#: operations overlap (the T-type step's group costs and its three sin/cos)
+INTERLEAVE = 4
+
+
 class Float32Ops:
     """The reference's arithmetic in float32: each helper is one numpy operation.
 
@@ -164,7 +169,7 @@ class Float32:
         return self
 
     def template_values(self) -> dict[str, object]:
-        return {}
+        return {"interleave": INTERLEAVE}
 
     def for_step(self, signals: list[Any], base: Any, global_q: int | None) -> Float32:
         return self
