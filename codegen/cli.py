@@ -84,7 +84,7 @@ def _write_json(path: str | None, data: dict) -> None:
 
 # ---------------------------------------------------------------- generate
 def cmd_generate(args: argparse.Namespace) -> int:
-    from codegen.stages.generate import generate
+    from codegen.stages.generate import generate, target_independent_files
 
     every = args.target == "all"
     if every:
@@ -92,8 +92,9 @@ def cmd_generate(args: argparse.Namespace) -> int:
     model = _load(args)
     out = cliargs.output_dir("-o", args.output)
     log = _log(args.quiet)
-    if every:  # one folder per target, same tables
-        paths = [p for t in TARGETS for p in generate(model.replace(target=t), out / t, log=log)]
+    if every:  # one folder per target, same tables; the target-independent files computed once
+        extra = target_independent_files(model, log)
+        paths = [p for t in TARGETS for p in generate(model.replace(target=t), out / t, log=log, extra=extra)]
     else:
         paths = generate(model, out, log=log)
     for p in paths:
@@ -222,10 +223,11 @@ def cmd_report(args: argparse.Namespace) -> int:
     cliargs.output_file("--json", args.json)
     out = cliargs.output_dir("-o", args.output) if args.output else None
     log = _log(args.quiet)
-    if model.controller.number_format != "fixed":
+    twin = fixed_twin(model)
+    if twin is not model:
         log(f"report: {model.name} is {model.controller.number_format}; analysing its fixed-point twin "
-            "(controller.number_format = fixed)")
-        model = fixed_twin(model)
+            f"(controller.number_format = {twin.controller.number_format})")
+        model = twin
     strategies = _strategies(args, model)
     with tempfile.TemporaryDirectory(prefix="mpcgen-report-") as tmp:
         traces = Path(tmp) if out is not None else None

@@ -21,6 +21,8 @@ from pathlib import Path
 
 import pytest
 
+from codegen.numfmt import FORMATS
+
 from conftest import ROOT
 
 CODEGEN = ROOT / "codegen"
@@ -32,6 +34,8 @@ TOPOLOGY_STRINGS = ("two-level", "t-type", "codegen.topologies")
 #: identifier word sequences that name a topology (after splitting at "_" and camelCase)
 TOPOLOGY_WORDS = (("two", "level"), ("twolevel",), ("three", "level"), ("threelevel",), ("t", "type"),
                   ("ttype",), ("tlevel",), ("3l",), ("2l",))
+#: number formats by name: a stage asks the format (``quantised``, the report's roles), never its name
+FORMAT_NAMES = tuple(FORMATS)
 #: the registry: the one assignment in codegen/topology.py allowed to name topologies
 REGISTRY = (CODEGEN / "topology.py", "TOPOLOGIES")
 
@@ -135,6 +139,8 @@ def stage_findings(source: str, path: str, module: str, registry: str | None = N
             for frag in TOPOLOGY_STRINGS:
                 if frag in low:
                     found.append(Finding(path, line, "topology string", repr(node.value)))
+            if node.value in FORMAT_NAMES:
+                found.append(Finding(path, line, "number-format name", repr(node.value)))
         for mod in _imported_modules(node, module):
             if mod == "codegen.topologies" or mod.startswith("codegen.topologies."):
                 found.append(Finding(path, line, "topology import", mod))
@@ -212,6 +218,7 @@ STAGE = "codegen.stages.example"
 @pytest.mark.parametrize("snippet, rule", [
     ('def run(model):\n    if model.inverter.topology == "t-type":\n        return 1\n', "topology string"),
     ('def run(model):\n    return {"two-level": 1}[model.inverter.topology]\n', "topology string"),
+    ('def run(model):\n    return model.controller.number_format == "fixed"\n', "number-format name"),
     ('import importlib\nm = importlib.import_module("codegen.topologies.ttype.plugin")\n', "topology string"),
     ("from codegen.topologies.twolevel import reference\n", "topology import"),
     ("import codegen.topologies.ttype.derive as d\n", "topology import"),

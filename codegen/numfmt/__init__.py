@@ -15,7 +15,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
-__all__ = ["Ops", "NumberFormat", "number_format", "FORMATS"]
+__all__ = ["Ops", "NumberFormat", "number_format", "FORMATS", "QUANTISED", "FLOAT_CONTROLLER", "IDEAL"]
 
 
 class Ops(Protocol):
@@ -86,6 +86,11 @@ class NumberFormat(Protocol):
         ...
 
     @property
+    def quantised(self) -> bool:
+        """True for an integer (fixed-point) format: the quantisation report applies to it."""
+        ...
+
+    @property
     def angle_guard_rad(self) -> float:
         """Largest |theta_e| the step accepts (the input guard's ANGLE limit), rad."""
         ...
@@ -151,3 +156,7 @@ from .float64 import FLOAT64  # noqa: E402
 #: Every number format, by ``controller.number_format`` value (layouts; ``scaled`` binds a step's scaling),
 #: and the analysis-only float64 ideal of ``mpcgen report`` (not a config choice).
 FORMATS: dict[str, NumberFormat] = {FLOAT32.name: FLOAT32, FIXED.name: FIXED, FLOAT64.name: FLOAT64}
+
+#: the formats the quantisation report compares, by role: the quantised controller, the float
+#: controller it is measured against, and the float64 ideal
+QUANTISED, FLOAT_CONTROLLER, IDEAL = FIXED.name, FLOAT32.name, FLOAT64.name

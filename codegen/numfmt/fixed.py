@@ -149,6 +149,7 @@ class Fixed:
     macros: str = "numfmt/fixed.j2"
     value_kind: str = "MPC_VALUE_I32"
     value_reader: str = "mpc_i32_value"
+    quantised: bool = True
     #: |theta_e| <= 8 rad (a wrapped angle, and its extrapolation by two periods): the angle is a
     #: dimensionless per-unit value, so a wide guard would cost every dimensionless signal its bits
     angle_guard_rad: float = 8.0

@@ -153,6 +153,7 @@ class Float32:
     value_reader: str = "mpc_f32_bits"
     ops: Float32Ops = field(default_factory=Float32Ops)
     scaling: Any = None
+    quantised: bool = False
     #: the sin/cos range reduction is exact for |n| <= 163 (codegen.kernels.trig)
     angle_guard_rad: float = 256.0
 

@@ -13,16 +13,18 @@ same bytes.
 from __future__ import annotations
 
 from collections.abc import Callable
-from functools import lru_cache
 from pathlib import Path
 
 from codegen.model import Model
+from codegen.numfmt import number_format
 from codegen.render import render_speed_pi, write_files
 from codegen.topology import topology_of
 
 
-def generate(model: Model, outdir: Path, log: Callable[[str], None] = print) -> list[Path]:
-    """Write the C files and the report for ``model.target`` into ``outdir``."""
+def generate(model: Model, outdir: Path, log: Callable[[str], None] = print,
+             extra: dict[str, str] | None = None) -> list[Path]:
+    """Write the C files and the report for ``model.target`` into ``outdir``, and the target-independent
+    files ``extra`` (:func:`target_independent_files`; computed here when not given)."""
     topo = topology_of(model)
     c = model.controller
     log(f"deriving the {topo.title} tables for {model.name} ({c.strategy}, tables {c.tables})")
@@ -30,12 +32,20 @@ def generate(model: Model, outdir: Path, log: Callable[[str], None] = print) -> 
     files = topo.render(model, tables, model.target)
     files.update(render_speed_pi(model, model.target))
     files[f"{model.prefix}_report.md"] = topo.report(model, tables, model.target)
-    if c.number_format == "fixed":
-        from codegen.stages.quantreport import report_name
-
-        log(f"quantisation report of {model.name} ({c.strategy}): fixed vs float64 ideal and float32 controller")
-        files[report_name(model)] = _quantisation(model.replace(target="host"))
+    files.update(target_independent_files(model, log) if extra is None else extra)
     return write_files(files, outdir)
+
+
+def target_independent_files(model: Model, log: Callable[[str], None] = print) -> dict[str, str]:
+    """Files that are the same for every target: for a quantised number format, the quantisation
+    report of the generated strategy (``<prefix>_quantisation.md``); else none."""
+    if not number_format(model.controller.number_format).quantised:
+        return {}
+    from codegen.stages.quantreport import report_name
+
+    log(f"quantisation report of {model.name} ({model.controller.strategy}): against the float64 ideal "
+        "and the float controller")
+    return {report_name(model): _quantisation(model.replace(target="host"))}
 
 
 #: states of the generated report (``mpcgen report`` takes more random states and every closed-loop state)
@@ -43,9 +53,8 @@ GENERATE_RANDOM_STATES = 5_000
 GENERATE_CLOSED_LOOP_STATES = 20_000
 
 
-@lru_cache(maxsize=8)
 def _quantisation(model: Model) -> str:
-    """The quantisation report of ``model``'s strategy (the same for every target: computed once)."""
+    """The quantisation report of ``model``'s strategy."""
     from codegen.stages.quantisation import analyse
     from codegen.stages.quantreport import markdown
 

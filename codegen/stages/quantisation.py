@@ -32,7 +32,7 @@ import numpy as np
 
 from codegen.errors import UsageError
 from codegen.model import Model
-from codegen.numfmt.float64 import FLOAT64
+from codegen.numfmt import FLOAT_CONTROLLER, IDEAL, QUANTISED, number_format
 from codegen.records import REAL, RecordLayout
 from codegen.teststates import in_format
 from codegen.topology import topology_of
@@ -50,7 +50,9 @@ RIPPLE_KEYS = ("T_rip_RMSE_nm", "psi_rip_RMSE_wb", "THD_ia_percent", "f_ave_hz",
 
 def fixed_twin(model: Model) -> Model:
     """``model`` itself if it is fixed point, else its fixed-point twin (per-signal formats)."""
-    return model if model.controller.number_format == "fixed" else model.with_controller(number_format="fixed")
+    if number_format(model.controller.number_format).quantised:
+        return model
+    return model.with_controller(number_format=QUANTISED)
 
 
 def _convert(x: np.ndarray, src: RecordLayout, dst: RecordLayout) -> np.ndarray:
@@ -124,7 +126,7 @@ def _agreement(topo: Any, t32: Any, t_fx: Any, x32: np.ndarray, x_fx: np.ndarray
 def _errors(topo: Any, t_fx: Any, t32: Any, t_64: Any, x_fx: np.ndarray) -> dict[str, Any]:
     """Fixed and float32 outputs against the float64 ideal on the same physical states ``x_fx`` (fixed)."""
     lay_fx = topo.input_record.bind(t_fx.nf)
-    x64 = _convert(x_fx, lay_fx, topo.input_record.bind(FLOAT64))
+    x64 = _convert(x_fx, lay_fx, topo.input_record.bind(number_format(IDEAL)))
     x32 = _convert(x_fx, lay_fx, topo.input_record.bind(t32.nf))
     ofx, o32, o64 = topo.step_batch(t_fx, x_fx), topo.step_batch(t32, x32), topo.step_batch(t_64, x64)
     ok = (ofx["fault"] == 0) & (o32["fault"] == 0) & (o64["fault"] == 0)
@@ -133,8 +135,8 @@ def _errors(topo: Any, t_fx: Any, t32: Any, t_64: Any, x_fx: np.ndarray) -> dict
     for name in ERROR_FIELDS:
         ideal = o64[name][ok]
         res[name] = {"unit": topo.output_record.field(name).unit,
-                     "fixed": _stats(out_fx.decode(name, ofx[name][ok]) - ideal, hist=True),
-                     "float32": _stats(out_32.decode(name, o32[name][ok]) - ideal),
+                     QUANTISED: _stats(out_fx.decode(name, ofx[name][ok]) - ideal, hist=True),
+                     FLOAT_CONTROLLER: _stats(out_32.decode(name, o32[name][ok]) - ideal),
                      "ideal_max_abs": float(np.abs(ideal).max()) if ideal.size else 0.0}
     return res
 
@@ -151,12 +153,12 @@ def _closed_loop(model_fx: Model, model_32: Model, strategies: list[str], log: L
     """Closed-loop metrics of the fixed controller and its float32 twin, side by side, with the ratio."""
     topo = topology_of(model_fx)
     res = {}
-    for label, m in (("fixed", model_fx), ("float32", model_32)):
+    for label, m in ((QUANTISED, model_fx), (FLOAT_CONTROLLER, model_32)):
         path = traces / f"{label}.npz" if traces is not None else None
         res[label] = topo.simulate(m, strategies, None, log=log, traces=path)["strategies"]
     out: dict[str, Any] = {}
     for s in strategies:
-        runs_fx, runs_32 = _runs(res["fixed"][s]), _runs(res["float32"][s])
+        runs_fx, runs_32 = _runs(res[QUANTISED][s]), _runs(res[FLOAT_CONTROLLER][s])
         out[s] = {}
         for run, m_fx in runs_fx.items():
             m_32 = runs_32[run]
@@ -164,7 +166,7 @@ def _closed_loop(model_fx: Model, model_32: Model, strategies: list[str], log: L
             for k in RIPPLE_KEYS:
                 if k in m_fx and k in m_32:
                     a, b = float(m_fx[k]), float(m_32[k])
-                    row[k] = {"fixed": a, "float32": b, "ratio": a / b if b else (1.0 if a == 0 else float("inf"))}
+                    row[k] = {QUANTISED: a, FLOAT_CONTROLLER: b, "ratio": a / b if b else (1.0 if a == 0 else float("inf"))}
             out[s][run] = row
     return out
 
@@ -182,7 +184,7 @@ def analyse(model: Model, strategies: list[str] | None = None, random_states: in
     (default: every strategy of its topology).  ``max_closed_loop``: at most this many of the recorded
     closed-loop states (evenly spaced); ``closed_loop``: run (d); ``traces``: directory the closed-loop
     runs' time series are written to (``fixed.npz``, ``float32.npz``).  JSON-ready dict."""
-    if model.controller.number_format != "fixed":
+    if not number_format(model.controller.number_format).quantised:
         raise UsageError(f"the quantisation report is about fixed point; {model.source} has "
                          f"controller.number_format = {model.controller.number_format!r} (use --number-format fixed)")
     topo = topology_of(model)
@@ -190,7 +192,7 @@ def analyse(model: Model, strategies: list[str] | None = None, random_states: in
     per: dict[str, Any] = {}
     for s in chosen:
         m_fx = model.with_controller(strategy=s)
-        m_32 = m_fx.with_controller(number_format="float32", fixed_q=None)
+        m_32 = m_fx.with_controller(number_format=FLOAT_CONTROLLER, fixed_q=None)
         log(f"quantisation {model.name} / {s}: deriving fixed, float32 and float64 tables")
         t_fx, t_32 = topo.derive(m_fx), topo.derive(m_32)
         lib = topo.host_library(m_32, t_32, with_sim=True)
@@ -203,7 +205,7 @@ def analyse(model: Model, strategies: list[str] | None = None, random_states: in
                             max_closed_loop)
         own32 = _convert(own_fx, topo.input_record.bind(t_fx.nf), topo.input_record.bind(t_32.nf))
         rnd_fx = in_format(rnd32, topo.input_record.bind(t_fx.nf))
-        t_64 = topo.derive(m_fx.with_controller(number_format="float64", fixed_q=None))
+        t_64 = topo.derive(m_fx.with_controller(number_format=IDEAL, fixed_q=None))
         errors = {"closed_loop": _errors(topo, t_fx, t_32, t_64, cl_fx),
                   "random": _errors(topo, t_fx, t_32, t_64, rnd_fx)}
         o_fx = topo.step_batch(t_fx, cl_fx)
@@ -222,7 +224,7 @@ def analyse(model: Model, strategies: list[str] | None = None, random_states: in
     out: dict[str, Any] = {"config": model.name, "config_hash": model.config_hash(), "topology": topo.name,
                            "strategies": per}
     if closed_loop:
-        cl = _closed_loop(model, model.with_controller(number_format="float32", fixed_q=None), chosen, log, traces)
+        cl = _closed_loop(model, model.with_controller(number_format=FLOAT_CONTROLLER, fixed_q=None), chosen, log, traces)
         for s in chosen:
             per[s]["closed_loop"] = cl[s]
     return out

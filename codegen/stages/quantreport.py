@@ -15,6 +15,7 @@ import numpy as np
 
 from codegen import __version__
 from codegen.model import Model
+from codegen.numfmt import FLOAT_CONTROLLER, QUANTISED
 from codegen.stages.quantisation import ERROR_FIELDS, RIPPLE_KEYS
 
 __all__ = ["markdown", "plots", "report_name"]
@@ -66,9 +67,9 @@ def _errors(d: dict) -> list[str]:
     for key, e in d["errors"].items():
         for name in ERROR_FIELDS:
             v = e[name]
-            lines.append(f"| {key} ({e['states']}) | {name} | {v['unit'] or '1'} | {_g(v['fixed']['max'], '.3e')} | "
-                         f"{_g(v['fixed']['rms'], '.3e')} | {_g(v['float32']['max'], '.3e')} | "
-                         f"{_g(v['float32']['rms'], '.3e')} | {_g(v['ideal_max_abs'])} |")
+            lines.append(f"| {key} ({e['states']}) | {name} | {v['unit'] or '1'} | {_g(v[QUANTISED]['max'], '.3e')} | "
+                         f"{_g(v[QUANTISED]['rms'], '.3e')} | {_g(v[FLOAT_CONTROLLER]['max'], '.3e')} | "
+                         f"{_g(v[FLOAT_CONTROLLER]['rms'], '.3e')} | {_g(v['ideal_max_abs'])} |")
     return lines
 
 
@@ -88,7 +89,7 @@ def _closed_loop(d: dict) -> list[str]:
         for k in RIPPLE_KEYS:
             if k in row:
                 v = row[k]
-                lines.append(f"| {run} | {k} | {_g(v['fixed'])} | {_g(v['float32'])} | {_g(v['ratio'], '.4f')} |")
+                lines.append(f"| {run} | {k} | {_g(v[QUANTISED])} | {_g(v[FLOAT_CONTROLLER])} | {_g(v['ratio'], '.4f')} |")
     return lines
 
 
@@ -127,20 +128,20 @@ def plots(model: Model, data: dict, traces: Path | None, outdir: Path) -> dict[s
 
     out: dict[str, list[str]] = {}
     runs: dict[str, Any] = {}
-    if traces is not None and (traces / "fixed.npz").exists():
-        runs = {label: np.load(traces / f"{label}.npz") for label in ("fixed", "float32")}
+    if traces is not None and (traces / f"{QUANTISED}.npz").exists():
+        runs = {label: np.load(traces / f"{label}.npz") for label in (QUANTISED, FLOAT_CONTROLLER)}
     for s, d in data["strategies"].items():
         files = []
         for run in d.get("closed_loop", {}) if runs else {}:
             key = f"{s}/{run}"
-            if f"{key}/te_nm" not in runs["fixed"].files:
+            if f"{key}/te_nm" not in runs[QUANTISED].files:
                 continue
             fig, (ax,) = new_figure()
-            for label, style in (("float32", {"color": "tab:orange", "lw": 0.5}),
-                                 ("fixed", {"color": "tab:blue", "lw": 0.5, "alpha": 0.8})):
+            for label, style in ((FLOAT_CONTROLLER, {"color": "tab:orange", "lw": 0.5}),
+                                 (QUANTISED, {"color": "tab:blue", "lw": 0.5, "alpha": 0.8})):
                 z = runs[label]
                 ax.plot(z[f"{key}/t_s"], z[f"{key}/te_nm"], label=f"Te, {label} controller", **style)
-            z = runs["fixed"]
+            z = runs[QUANTISED]
             ax.plot(z[f"{key}/t_s"], z[f"{key}/torque_ref_nm"], color="k", lw=0.8, label="T* (fixed)")
             ax.set(xlabel="time t / s", ylabel="torque / (N*m)", title=f"{model.name} {s} {run}: torque, fixed vs float32")
             ax.grid(True, alpha=0.3)
@@ -151,7 +152,7 @@ def plots(model: Model, data: dict, traces: Path | None, outdir: Path) -> dict[s
         fig, axes = new_figure(len(ERROR_FIELDS), height=2.6 * len(ERROR_FIELDS))
         for ax, field in zip(axes, ERROR_FIELDS):
             for key, e in d["errors"].items():
-                h = e[field]["fixed"].get("hist")
+                h = e[field][QUANTISED].get("hist")
                 if h:
                     edges = np.asarray(h["edges"])
                     ax.stairs(h["counts"], edges, label=key)
