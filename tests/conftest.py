@@ -3,7 +3,8 @@
 Test modules import these names with ``from conftest import ...``: pytest puts
 this folder on ``sys.path`` (rootdir conftest, default "prepend" import mode),
 so the tests in sub-folders (tests/stages, tests/topologies/<name>) see it too.
-Test folders have no ``__init__.py``: every test module's basename is unique.
+The folders under tests/topologies are packages (``__init__.py``), so their test
+modules may share basenames with each other.
 """
 from __future__ import annotations
 

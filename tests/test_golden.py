@@ -78,21 +78,20 @@ def test_simulate_metrics_match_golden(name: str, tmp_path: Path) -> None:
     assert main(["simulate", str(EXAMPLES / f"{name}.toml"), "--json", str(out), "-q"]) == 0
     got = _strip(json.loads(out.read_text()))
     want = _strip(json.loads((GOLDEN / f"simulate_{name}.json").read_text()))
-    _assert_contains(got, want, name)
+    _assert_equal(got, want, name)
 
 
-def _assert_contains(got: object, want: object, where: str) -> None:
-    """Every recorded key is still there with the same value, bit for bit (JSON text of each scalar:
-    float repr, int vs float, null); lists keep their length and order.  Keys added since the
-    recording (steady-state checks, fault counts per kind, ...) are not in ``want`` and pass."""
+def _assert_equal(got: object, want: object, where: str) -> None:
+    """The same keys, lists of the same length and order, and every scalar with the same JSON text
+    (float repr, int vs float, null): a metric added, renamed or changed is a re-recording."""
     if isinstance(want, dict):
-        assert isinstance(got, dict), f"{where}: not an object"
+        assert isinstance(got, dict) and set(got) == set(want), (
+            f"{where}: keys differ: added {sorted(set(got) - set(want))}, missing {sorted(set(want) - set(got))}")
         for k, v in want.items():
-            assert k in got, f"{where}/{k}: recorded key missing"
-            _assert_contains(got[k], v, f"{where}/{k}")
+            _assert_equal(got[k], v, f"{where}/{k}")
     elif isinstance(want, list):
         assert isinstance(got, list) and len(got) == len(want), f"{where}: list differs in length"
         for i, (g, w) in enumerate(zip(got, want)):
-            _assert_contains(g, w, f"{where}[{i}]")
+            _assert_equal(g, w, f"{where}[{i}]")
     else:
         assert json.dumps(got) == json.dumps(want), f"{where}: {got!r} != recorded {want!r}"

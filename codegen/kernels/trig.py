@@ -67,18 +67,20 @@ def _fit(func, powers: list[int], lead: float) -> np.ndarray:
 
 
 @lru_cache(maxsize=1)
-def sincos_coeffs() -> SinCosCoeffs:
-    """Derive the polynomial coefficients once (float64 fit, float32 rounding)."""
+def sincos_coeffs64() -> tuple[float, ...]:
+    """The constants of the generated sin/cos in float64, derived once (the float64 fit), in the order
+    2/pi, PIO2_HI, PIO2_LO, S3, S5, S7, C2, C4, C6, C8: every number format rounds them once."""
     hi, lo = _split_pio2()
     s = _fit(np.sin, [3, 5, 7], 1.0)
     c = _fit(lambda r: np.cos(r) - 1.0, [2, 4, 6, 8], 0.0)
-    return SinCosCoeffs(
-        two_over_pi=f32(2.0 / math.pi),
-        pio2_hi=f32(hi),
-        pio2_lo=f32(lo),
-        s=tuple(f32(v) for v in s),  # type: ignore[arg-type]
-        c=tuple(f32(v) for v in c),  # type: ignore[arg-type]
-    )
+    return (2.0 / math.pi, hi, lo, *(float(v) for v in s), *(float(v) for v in c))
+
+
+@lru_cache(maxsize=1)
+def sincos_coeffs() -> SinCosCoeffs:
+    """The coefficients rounded once to float32 (the float32 step's; tests and ``sincos_f32``)."""
+    v = [f32(x) for x in sincos_coeffs64()]
+    return SinCosCoeffs(two_over_pi=v[0], pio2_hi=v[1], pio2_lo=v[2], s=(v[3], v[4], v[5]), c=(v[6], v[7], v[8], v[9]))
 
 
 def _horner(ops: Any, coeffs: Any, x: Any) -> Any:
@@ -131,18 +133,19 @@ def sincos_f32(x: np.ndarray, k: SinCosCoeffs | None = None) -> tuple[np.ndarray
     return _sincos(FLOAT32.ops, x, k or sincos_coeffs())
 
 
-def sincos_constants() -> list[tuple[str, np.float32, str, str]]:
-    """(name, value, unit, meaning) of every constant the generated sin/cos uses."""
-    k = sincos_coeffs()
-    return [
-        ("TWO_OVER_PI", k.two_over_pi, "1/rad", "2/pi: quadrant of theta_e"),
-        ("PIO2_HI", k.pio2_hi, "rad", "pi/2, high part (Cody-Waite)"),
-        ("PIO2_LO", k.pio2_lo, "rad", "pi/2 - PIO2_HI"),
-        ("SIN_S3", k.s[0], "", "sin r = r + r^3 (S3 + r^2 (S5 + r^2 S7))"),
-        ("SIN_S5", k.s[1], "", "sin coefficient of r^5 (least squares on [0, pi/4])"),
-        ("SIN_S7", k.s[2], "", "sin coefficient of r^7"),
-        ("COS_C2", k.c[0], "", "cos r = 1 + r^2 (C2 + r^2 (C4 + r^2 (C6 + r^2 C8)))"),
-        ("COS_C4", k.c[1], "", "cos coefficient of r^4"),
-        ("COS_C6", k.c[2], "", "cos coefficient of r^6"),
-        ("COS_C8", k.c[3], "", "cos coefficient of r^8"),
+def sincos_constants() -> list[tuple[str, float, str, str]]:
+    """(name, float64 value, unit, meaning) of every constant the generated sin/cos uses (the step's
+    number format rounds each once)."""
+    names = [
+        ("TWO_OVER_PI", "1/rad", "2/pi: quadrant of theta_e"),
+        ("PIO2_HI", "rad", "pi/2, high part (Cody-Waite)"),
+        ("PIO2_LO", "rad", "pi/2 - PIO2_HI"),
+        ("SIN_S3", "", "sin r = r + r^3 (S3 + r^2 (S5 + r^2 S7))"),
+        ("SIN_S5", "", "sin coefficient of r^5 (least squares on [0, pi/4])"),
+        ("SIN_S7", "", "sin coefficient of r^7"),
+        ("COS_C2", "", "cos r = 1 + r^2 (C2 + r^2 (C4 + r^2 (C6 + r^2 C8)))"),
+        ("COS_C4", "", "cos coefficient of r^4"),
+        ("COS_C6", "", "cos coefficient of r^6"),
+        ("COS_C8", "", "cos coefficient of r^8"),
     ]
+    return [(n, v, u, d) for (n, u, d), v in zip(names, sincos_coeffs64())]

@@ -30,8 +30,8 @@ pytestmark = pytest.mark.slow
 
 FUZZ = Path(__file__).resolve().parent / "fuzz"
 RUNS = 1_000_000
-#: seconds libFuzzer may take for the runs (it stops there, and the test then fails for too few runs)
-TIME_LIMIT_S = 240
+#: a hang guard only (the runs take about 2 min here): the test measures no speed, it demands every run
+HANG_S = 1800
 CFLAGS = ("-std=c99", "-g", "-O2", "-DMPC_HIL", "-Wall", "-Wextra", "-Wconversion", "-Wdouble-promotion", "-Werror",
           "-fsanitize=fuzzer,address,undefined", "-fno-sanitize-recover=all")
 
@@ -64,9 +64,9 @@ def test_seed_corpus_is_small_and_present():
 def test_frame_decoder_survives_a_million_inputs(fuzzer, tmp_path):
     corpus = tmp_path / "corpus"
     shutil.copytree(FUZZ / "corpus", corpus)
-    r = subprocess.run([str(fuzzer), f"-runs={RUNS}", "-seed=1", "-max_len=256", f"-max_total_time={TIME_LIMIT_S}",
+    r = subprocess.run([str(fuzzer), f"-runs={RUNS}", "-seed=1", "-max_len=256",
                         "-print_final_stats=1", f"-artifact_prefix={tmp_path}/", str(corpus)],
-                       capture_output=True, text=True, timeout=TIME_LIMIT_S + 60, cwd=tmp_path)
+                       capture_output=True, text=True, timeout=HANG_S, cwd=tmp_path)
     log = r.stdout + r.stderr
     assert r.returncode == 0, log[-4000:]
     assert "ERROR:" not in log and "runtime error" not in log, log[-4000:]

@@ -36,8 +36,7 @@ def test_emulated_bench(tmp_path):
         # the cycle estimate (traced path through the M7 pipeline model) and the lower bound beside it
         assert e["m7_cycles_est_min"] <= e["m7_cycles_est_median"] <= e["m7_cycles_est_max"]
         assert 0 < e["m7_cycles_bound"] <= e["m7_cycles_est_median"]
-        assert e["m7_cycles_est_over_bound"] == pytest.approx(e["m7_cycles_est_median"] / e["m7_cycles_bound"],
-                                                              rel=1e-3)
+        assert e["m7_cycles_est_over_bound"] == e["m7_cycles_est_median"] / e["m7_cycles_bound"]
         # a step cannot take fewer cycles than half its instructions (two-wide issue)
         assert e["m7_cycles_est_median"] >= e["m7_instructions_per_step"] / 2
     # every simplified strategy holds the zero vector on most samples: cheaper median
@@ -59,7 +58,6 @@ def test_emulated_bench_fixed_point_beside_float32(tmp_path, capsys):
         assert e["m7_instructions_per_step"] == e["m7_instructions_per_step_fixed"] > 50
         assert e["m7_instructions_per_step_float32"] > 50
         by = e["m7_by_number_format"]
-        assert by["fixed"]["mismatches"] == 0 and by["fixed"]["selftest_states"] == 1000 + 2000
-        assert by["float32"]["mismatches"] == 0
+        assert by["fixed"]["selftest_states"] == 1000 + 2000  # every one bit-exact, or bench raises
     out = capsys.readouterr().out
     assert "fixed" in out and "float32" in out

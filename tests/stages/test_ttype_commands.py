@@ -44,8 +44,9 @@ def test_simulate_table5_metrics(tmp_path, capsys):
             m = data["strategies"][s][speed]
             for k in keys:
                 assert m[k] is not None, (s, speed, k)
-    for speed in ("300rpm", "1800rpm", "3000rpm"):
+    for speed in ("300rpm_steady", "1800rpm_steady", "3000rpm_steady"):  # the steady windows, start-up excluded
         m63, m27 = data["strategies"]["mpdtc63"][speed], data["strategies"]["mpdtc27"][speed]
+        assert not m63["not_steady"] and not m27["not_steady"] and all(w["steady"] for w in m63["steady"]), speed
         assert m63["max_line_jump_udc2"] <= 1          # dv/dt limit of 63-MPDTC
         assert 3 <= m63["Cal_ave"] <= 7
         assert m27["max_line_jump_udc2"] >= 2 and m27["Cal_ave"] == 19

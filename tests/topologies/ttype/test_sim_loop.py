@@ -108,7 +108,7 @@ def test_seven_segment_run_prints_its_throughput(stub, capsys):
     with capsys.disabled():
         print(f"\nthree-level closed loop, stub 63-vector controller, {np.mean(tr.applied_vector >= 27):.0%} "
               f"seven-segment periods, 1 us RK4 sub-steps: {rate:,.0f} periods/s")
-    assert tr.n == round(1.0 / model.controller.dt_s) and np.mean(tr.applied_vector >= 27) > 0.1 and rate > 0
+    assert tr.n == round(1.0 / model.controller.dt_s) and np.mean(tr.applied_vector >= 27) > 0.1
 
 
 def test_bad_parameters_and_state(stub):
