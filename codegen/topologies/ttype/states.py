@@ -21,7 +21,10 @@ from codegen import teststates as common
 from codegen.model import Model
 from codegen.numfmt.float32 import F
 from codegen.topologies.ttype.derive import ThreeLevelTables, guard_limits, t_n_min
-from codegen.topologies.ttype.records import INPUT, INPUT_DTYPE
+from codegen.topologies.ttype.records import INPUT, INPUT_DTYPE, SAFE_STATE
+
+#: the zero vector OOO (the safe state)
+OOO = SAFE_STATE
 
 
 def random_states(model: Model, n: int, seed: int = 1) -> np.ndarray:
@@ -70,27 +73,25 @@ def _nominal(model: Model, n: int, rng: np.random.Generator) -> np.ndarray:
 
 
 def _on_sector_border(model: Model, x: np.ndarray, rng: np.random.Generator) -> None:
-    """Place u* (float64 model of the step, no delay term) on a 30-deg border.
+    """Place u* on a 30-deg border (exactly in float64, or 1e-7 / 1e-6 rad next to it).
 
-    Solve for the stator flux at k+1 that makes u* point at the border angle
-    with a random magnitude, then back to currents at k (ignoring the delay
-    step's voltage, which is why only some states land exactly: enough to
-    exercise both sides of every border)."""
+    With speed zero and the previous vector OOO (zero voltage), the step is linear in i(k):
+    the delay step gives i1 = (1 - Ts Rs/Ls) i, the MTPA reference in dq is (psi_f, Ls i_q*),
+    and u* = ((psi_f, Ls i_q*) - (Ls i1 + psi_f))/Ts + Rs i1 (dq, rotated by theta).  Solve it
+    for i(k) given u* = U e^(j ang); the float32 rounding of the currents then puts u* within
+    a few 1e-7 rad of the border (``tests/topologies/ttype/test_ttype_states.py`` measures it)."""
     m, ts = model.motor, model.controller.dt_s
     n = len(x)
+    x["omega_e_rad_s"] = 0.0
+    x["prev_vector"] = OOO
     th = x["theta_e_rad"].astype(np.float64)
-    w = x["omega_e_rad_s"].astype(np.float64)
-    th2 = th + 2 * w * ts
     iqr = x["torque_ref_nm"].astype(np.float64) / (1.5 * m.pole_pairs * m.psi_f_wb)
-    pr = (m.psi_f_wb + 1j * m.ld_h * iqr) * np.exp(1j * th2)
-    ang = rng.integers(0, 12, n) * (math.pi / 6)
-    u = rng.uniform(1, 150, n) * np.exp(1j * ang)
-    psi1 = pr - u * ts  # Rs term neglected
-    psi_dq = psi1 * np.exp(-1j * th)
-    i_d = (psi_dq.real - m.psi_f_wb) / m.ld_h
-    i_q = psi_dq.imag / m.ld_h
-    x["ia_a"], x["ib_a"] = common.phase_currents(i_d, i_q, th)
-    x["omega_e_rad_s"] = np.where(rng.random(n) < 0.5, 0.0, x["omega_e_rad_s"])
+    ang = rng.integers(0, 12, n) * (math.pi / 6) + rng.choice([0.0, 1e-7, -1e-7, 1e-6, -1e-6], n)
+    u_dq = rng.uniform(1, 150, n) * np.exp(1j * (ang - th))
+    ls, rs = m.ld_h, m.rs_ohm
+    i1 = (u_dq - 1j * ls * iqr / ts) / (rs - ls / ts)
+    i = i1 / (1.0 - ts * rs / ls)
+    x["ia_a"], x["ib_a"] = common.phase_currents(i.real, i.imag, th)
 
 
 def adversarial_states(model: Model, t: ThreeLevelTables, n_target: int = 200_000, seed: int = 2) -> np.ndarray:
@@ -100,7 +101,7 @@ def adversarial_states(model: Model, t: ThreeLevelTables, n_target: int = 200_00
     ts = model.controller.dt_s
     parts: list[np.ndarray] = []
 
-    # u* on sector borders, with zero speed for half of them (exact geometry)
+    # u* on sector borders (speed zero, previous vector OOO: the step is linear in the currents)
     n = n_target // 5
     x = _nominal(model, n, rng)
     _on_sector_border(model, x, rng)

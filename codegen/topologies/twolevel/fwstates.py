@@ -19,7 +19,7 @@ from codegen.teststates import guard_rows, in_format, phase_currents, rows_to_re
 from codegen.topologies.twolevel.derive import TwoLevelTables, guard_limits
 from codegen.topologies.twolevel.records import INPUT, INPUT_DTYPE
 from codegen.topologies.twolevel.reference import step_batch
-from codegen.topologies.twolevel.states import flux_border_currents, limits, threshold_states
+from codegen.topologies.twolevel.states import limits, place_flux_on_border, threshold_states
 
 #: the float inputs of the two-level record
 FLOATS = ("ia_a", "ib_a", "theta_e_rad", "omega_e_rad_s", "udc_v", "torque_ref_nm")
@@ -68,10 +68,9 @@ def _threshold(model: Model, t: TwoLevelTables, rng: np.random.Generator, n: int
 
 def _borders(model: Model, rng: np.random.Generator, n: int) -> np.ndarray:
     """Stator flux on a 30-degree sector border (float rounding puts it either side)."""
-    th = rng.uniform(0, 2 * math.pi, n)
-    ia, ib = flux_border_currents(model, n, th, 0.2, rng)
     x = _operating(model, rng, n)
-    x["ia_a"], x["ib_a"], x["theta_e_rad"] = ia.astype(F), ib.astype(F), th.astype(F)
+    x["theta_e_rad"] = rng.uniform(0, 2 * math.pi, n)
+    place_flux_on_border(model, x, 0.2, rng)
     return x
 
 

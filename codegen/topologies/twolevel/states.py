@@ -49,16 +49,28 @@ def limits(model: Model) -> tuple[common.Limit, ...]:
             common.Limit("torque_ref_nm", g["TORQUE_REF_GUARD_NM"]))
 
 
-def flux_border_currents(model: Model, n: int, theta: np.ndarray, spread: float,
-                         rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
-    """Phase currents (float64) that put the stator flux on a 30-degree sector border (or 1e-7 /
-    1e-6 rad next to it) at rotor angle ``theta``, magnitude psi_ref * (1 +- ``spread``)."""
-    m = model.motor
+def place_flux_on_border(model: Model, x: np.ndarray, spread: float, rng: np.random.Generator) -> None:
+    """Set the phase currents of ``x`` (in place) so that the flux the step takes its sector from is on
+    a 30-degree border (or 1e-7 / 1e-6 rad next to it), magnitude psi_ref * (1 +- ``spread``).
+
+    Without delay compensation that is the flux at k.  With it, the step advances to k+1 under the
+    applied vector: those states get a zero vector (prev_sw 000 or 111) and speed zero, so
+    flux-geometry keeps psi(k+1) = psi(k), and dq-euler gives i(k+1) = (1 - dt Rs/L) i(k) per axis,
+    which is inverted here."""
+    m, c = model.motor, model.controller
+    n = len(x)
+    theta = x["theta_e_rad"].astype(np.float64)
     ang = rng.integers(0, 12, n) * (math.pi / 6) + rng.choice([0.0, 1e-7, -1e-7, 1e-6, -1e-6], n)
-    mag = model.controller.psi_ref_wb * rng.uniform(1 - spread, 1 + spread, n)
+    mag = c.psi_ref_wb * rng.uniform(1 - spread, 1 + spread, n)
     i_d = (mag * np.cos(ang - theta) - m.psi_f_wb) / m.ld_h
     i_q = mag * np.sin(ang - theta) / m.lq_h
-    return common.phase_currents(i_d, i_q, theta)
+    if c.delay_compensation:
+        x["prev_sw"] = rng.choice([0, 7], n)
+        x["omega_e_rad_s"] = 0.0
+        if c.predictor == "dq-euler":
+            i_d = i_d / (1.0 - c.dt_s * m.rs_ohm / m.ld_h)
+            i_q = i_q / (1.0 - c.dt_s * m.rs_ohm / m.lq_h)
+    x["ia_a"], x["ib_a"] = common.phase_currents(i_d, i_q, theta)
 
 
 def threshold_states(x: np.ndarray, t: TwoLevelTables, reference_step: StepBatch, rng: np.random.Generator) -> None:
@@ -84,7 +96,7 @@ def adversarial_states(model: Model, t: TwoLevelTables, reference_step: StepBatc
 
     # sector borders: flux exactly on (and next to) every 30 deg border
     x = base(n_target // 5)
-    x["ia_a"], x["ib_a"] = flux_border_currents(model, len(x), x["theta_e_rad"].astype(np.float64), 0.1, rng)
+    place_flux_on_border(model, x, 0.1, rng)
     parts.append(x)
 
     # angle-reduction borders: multiples of pi/4 and pi/2, +-0, one ulp either side
