@@ -145,9 +145,9 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     else:
         data = topo.simulate(model, _strategies(args, model), plots, log=log, traces=traces)
     print(data.pop("_table"))
-    # the plant simulated (not in the config hash: it never reaches the C)
-    data["plant"] = {**dataclasses.asdict(model.plant),
-                     "actuation_delay_periods": model.plant.delay_periods(model.controller.delay_compensation)}
+    # the plant simulated (not in the config hash: it never reaches the C); actuation_delay_periods
+    # None: the delay the step compensates (docs/config.md [plant])
+    data["plant"] = dataclasses.asdict(model.plant)
     if args.paper:
         side = topo.paper_table(model, data)
         print()

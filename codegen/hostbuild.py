@@ -25,7 +25,7 @@ import cffi
 
 from codegen.errors import MpcgenError
 from codegen.model import Model
-from codegen.numfmt import NumberFormat, number_format
+from codegen.numfmt import NumberFormat
 from codegen.records import Record, RecordLayout
 from codegen.render import write_files
 
@@ -185,10 +185,9 @@ def _check_layout(lib: HostLib) -> None:
 
 
 def build_step_library(model: Model, tag: str, files: dict[str, str], cdef: str, records: tuple[Record, Record],
-                       sim: Callable[[], SimSources] | None = None, nf: NumberFormat | None = None) -> HostLib:
+                       sim: Callable[[], SimSources] | None, nf: NumberFormat) -> HostLib:
     """A topology's host build: its rendered step (host profile) and cffi ``cdef``, its (input,
-    output) records bound to the step's number format ``nf`` (the derived tables', with its scaling;
-    default: the config's format, layouts only), + the closed-loop simulator ``sim()`` gives."""
-    nf = nf or number_format(model.controller.number_format)
+    output) records bound to the step's number format ``nf`` (the derived tables', with its scaling),
+    + the closed-loop simulator ``sim()`` gives."""
     return build_library(model.prefix, tag, files, cdef, Records(records[0].bind(nf), records[1].bind(nf)),
                          sim() if sim is not None else None)

@@ -106,7 +106,7 @@ def steady_windows(model: Model, window_s: float = 0.2) -> list[tuple[float, flo
     """The last ``window_s`` of each constant-reference segment, as (t0, t1) in s.
 
     Segments are split at every instant where the speed reference or the load
-    changes (plant-and-metrics.md "Metrics": default window is the last 0.2 s
+    changes (docs/simulation.md "Metrics": default window is the last 0.2 s
     of each constant-reference segment).  A segment shorter than ``window_s``
     gives its whole length.  For the seed-001 SPMSM scenario (speed step at
     2 s, load steps at 1 s and 3 s, 4 s total):
@@ -327,7 +327,7 @@ def thd(
 
     FFT over an integer number of fundamental periods inside [t0, t1)
     (:func:`amplitude_spectrum`), harmonics h = 2 .. h_max with h_max*f1 <=
-    min(f_max_hz, fs/2) (plant-and-metrics.md "THD of i_a").  Only integer
+    min(f_max_hz, fs/2) (docs/simulation.md "Metrics").  Only integer
     harmonics enter the sum.  The info dict gives the window actually used,
     the number of periods, f1, the harmonic range and the fundamental's
     amplitude.

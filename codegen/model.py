@@ -133,6 +133,14 @@ class Scenario:
     window_s: float = 0.2
 
 
+#: the plant parameters whose unset (None) value is the controller's model's: plant field -> that field
+PLANT_DEFAULTS: dict[str, str] = {
+    "rs_ohm": "motor.rs_ohm", "ld_h": "motor.ld_h", "lq_h": "motor.lq_h", "psi_f_wb": "motor.psi_f_wb",
+    "j_kgm2": "motor.j_kgm2", "b_nms": "motor.b_nms", "udc_v": "inverter.udc_v", "c_f": "inverter.c_f",
+    "adc_full_scale_a": "inverter.i_trip_a",
+}
+
+
 @dataclass(frozen=True)
 class Plant:
     """The simulated plant where it differs from the controller's model, and its non-idealities.
@@ -143,7 +151,7 @@ class Plant:
     """
 
     #: decision from the samples of period k applied during [k+d, k+d+1) (None: 1 with
-    #: controller.delay_compensation, else 0, the timing each controller assumes)
+    #: controller.delay_compensation, else 0)
     actuation_delay_periods: int | None = None
     # parameter overrides (None: the controller's value), for mismatch studies
     rs_ohm: float | None = None
@@ -166,6 +174,15 @@ class Plant:
     noise_seed: int = 1
     encoder_bits: int = 0
     measurement_delay_s: float = 0.0
+
+    def value(self, name: str, model: Model) -> float:
+        """The plant's value of the parameter ``name`` (a field of this class): the override, else the
+        controller's model's (:data:`PLANT_DEFAULTS`)."""
+        own = getattr(self, name)
+        if own is not None:
+            return float(own)
+        section, attr = PLANT_DEFAULTS[name].split(".")
+        return float(getattr(getattr(model, section), attr))
 
     def delay_periods(self, delay_compensation: bool) -> int:
         """The actuation delay d in periods (the default follows the controller's assumption)."""

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -19,7 +20,7 @@ from codegen import __version__
 from codegen.kernels.consts import Const
 from codegen.model import Model
 from codegen.numfmt import number_format
-from codegen.numfmt.float32 import FLOAT32, c_float_literal
+from codegen.numfmt.float32 import FLOAT32
 from codegen.records import REAL, Record
 from codegen.resources import templates_dir
 
@@ -81,7 +82,6 @@ def environment(format_name: str | None = None) -> jinja2.Environment:
         keep_trailing_newline=True,
         autoescape=False,
     )
-    env.filters["c_float"] = c_float_literal
     if format_name is not None:
         env.filters["real_literal"] = number_format(format_name).literal
     return env
@@ -110,6 +110,12 @@ def render_files(templates: dict[str, str], ctx: dict) -> dict[str, str]:
     return {name: env.get_template(tpl).render(ctx) for name, tpl in templates.items()}
 
 
+def sincos_bound(angle_max_rad: float, what: str) -> str:
+    """The comment on the sin/cos quadrant count: the largest |n| = round(|x| 2/pi) for |x| up to
+    ``angle_max_rad`` (``what`` says where that bound comes from)."""
+    return f"|n| <= {math.floor(angle_max_rad * 2.0 / math.pi + 0.5)}: |x| <= {what} = {angle_max_rad:.6g} rad"
+
+
 def step_context(model: Model, target: str, records: tuple[Record, Record],
                  faults: tuple[tuple[str, int, str], ...], **values: object) -> dict:
     """Context of a topology's step templates: the shared part (banner, number format, records,
@@ -119,7 +125,7 @@ def step_context(model: Model, target: str, records: tuple[Record, Record],
     return {
         **base_context(model, target),
         **nf.template_values(),
-        "real_fields": [{"name": f.name, "unit": f.unit, "q": nf.scaling.q(f.unit) if nf.scaling else 0}
+        "real_fields": [{"name": f.name, "q": nf.scaling.q(f.unit) if nf.scaling else 0}
                         for f in real],
         "faults": faults,
         "dt_s": model.controller.dt_s,

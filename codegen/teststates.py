@@ -27,7 +27,7 @@ from codegen.records import REAL, RecordLayout
 __all__ = [
     "NON_FINITE", "Limit", "phase_currents", "random_currents_and_motion", "random_torque_ref",
     "angle_reduction_borders", "threshold_torque_refs", "apply_limit_cases", "up", "down",
-    "guard_rows", "rows_to_records", "seeded_mix",
+    "guard_rows", "rows_to_records", "seeded_mix", "in_format",
 ]
 
 #: the non-finite float32 values every float input is tested with
@@ -98,7 +98,7 @@ def random_torque_ref(n: int, g: Mapping[str, float], rng: np.random.Generator) 
 
 def angle_reduction_borders(n: int, angle_guard: float, rng: np.random.Generator) -> np.ndarray:
     """``n`` float32 angles on the borders of the angle reduction: multiples of pi/4 (every
-    quadrant and octant border over +-80 turns), one float32 step either side of them, and
+    quadrant and octant border over +-80 pi rad, 40 turns), one float32 step either side of them, and
     first 0, -0 and the guard limit of either sign."""
     k = rng.integers(-320, 321, n)
     th = (k * (math.pi / 4)).astype(np.float32)

@@ -6,8 +6,10 @@ Modules: ``schema`` (the protocol, defined once), ``crc32`` and ``framing``
 firmware's generated codec), ``link`` (pyserial), ``virtual`` (the host port
 as a protocol program on a pseudo-terminal), ``boards``, ``session``
 (handshake, pipelined replay, retries, resynchronisation, reset detection),
-``states``, ``replay`` (mode ``replay``), ``progress``, ``faults`` (a fault
-injector between harness and board, for tests), ``cli`` (``mpcgen hil``).
+``states``, ``replay`` (mode ``replay``), ``closedloop`` (mode ``closed-loop``),
+``onboard`` (mode ``onboard``), ``qemu`` (the emulated board), ``exchange_log``
+(``--log``/``--check-log``), ``progress``, ``faults`` (a fault injector between
+harness and board, for tests), ``cli`` (``mpcgen hil``).
 
 hil imports codegen; codegen never imports hil (import-linter contract).
 """

@@ -37,8 +37,10 @@ def cmd_hil(args: argparse.Namespace) -> int:
     from codegen.topology import topology_of
 
     from .boards import BOARDS, VIRTUAL, open_board
+    from .link import open_link
     from .qemu import QEMU_BOARD
     from .qemu import TIMEOUT_S as QEMU_TIMEOUT_S
+    from .qemu import WINDOW_OCTETS as QEMU_WINDOW_OCTETS
     from .replay import replay
     from .schema import Schema
     from .session import Session
@@ -70,7 +72,7 @@ def cmd_hil(args: argparse.Namespace) -> int:
     log = base._log(args.quiet)
     if args.port is not None:
         try:
-            open_board(model, None, args.port).__enter__().close()
+            open_link(args.port, args.baud).close()  # fails here, before any long run
         except (serial.SerialException, OSError, ValueError) as exc:
             raise UsageError(f"--port = {args.port!r}: cannot open it ({exc})") from None
     if args.mode == "onboard":
@@ -95,9 +97,12 @@ def cmd_hil(args: argparse.Namespace) -> int:
                           "schema_hash": schema.schema_hash, "strategy": model.controller.strategy,
                           "board": args.port or args.board or VIRTUAL, "mode": args.mode}
                 link = LoggingLink(board_link, stack.enter_context(open(log_path, "w")), header)
-            timeout_s = args.timeout if args.timeout is not None else (QEMU_TIMEOUT_S if args.board == QEMU_BOARD
-                                                                       else 0.5)
-            session = Session(link, schema, timeout_s=timeout_s, retries=args.retries, batch=args.batch)
+            # the emulated board: a long timeout and a small window (QEMU's slow UART input); else the defaults
+            kw: dict[str, Any] = ({"timeout_s": QEMU_TIMEOUT_S, "window_octets": QEMU_WINDOW_OCTETS}
+                                  if args.board == QEMU_BOARD else {})
+            if args.timeout is not None:
+                kw["timeout_s"] = args.timeout
+            session = Session(link, schema, retries=args.retries, batch=args.batch, **kw)
             info = session.handshake()
             log(f"board {info.target}: config {info.config_hash}, schema {info.schema_hash}, clock "
                 f"{info.core_clock_hz} Hz, cycles in {info.cycle_unit}, max batch {info.max_batch}")

@@ -19,6 +19,7 @@ Speed: the emulated UART takes one octet at a time from the socket (about
 """
 from __future__ import annotations
 
+import re
 import socket
 import subprocess
 import time
@@ -26,6 +27,7 @@ from pathlib import Path
 from typing import Any
 
 from codegen.model import Model
+from codegen.resources import firmware_dir
 from codegen.stages.emulate import EmulationError, kill_group
 from codegen.stages.firmware import (
     ICOUNT_SHIFT,
@@ -34,19 +36,25 @@ from codegen.stages.firmware import (
     require_tools,
 )
 
+from .boards import QEMU_BOARD
 from .virtual import build_protocol_image
 
 __all__ = ["QEMU_BOARD", "TIMEOUT_S", "WINDOW_OCTETS", "QemuBoard", "build_qemu_board"]
 
-#: name of the emulated board
-QEMU_BOARD = "qemu-m7"
 #: unanswered request octets kept in flight on the emulated UART (about 0.12 s of input at 17 kB/s; no resends measured)
 WINDOW_OCTETS = 2048
 #: seconds before an unanswered frame is sent again on the emulated board (QEMU slows down a lot on a
 #: loaded machine; a resend there only adds load, never a lost frame: its UART has flow control)
 TIMEOUT_S = 10.0
-#: -icount shift the protocol image's instruction count assumes (PORT_ICOUNT_SHIFT of the qemu-m7 port)
-PORT_ICOUNT_SHIFT = 10
+
+
+def port_icount_shift() -> int:
+    """The -icount shift the qemu-m7 port counts instructions for (its port_config.h PORT_ICOUNT_SHIFT)."""
+    text = (firmware_dir() / "ports" / "qemu-m7" / "port_config.h").read_text()
+    found = re.search(r"^#define PORT_ICOUNT_SHIFT (\d+)", text, re.M)
+    if found is None:
+        raise EmulationError("firmware/ports/qemu-m7/port_config.h defines no PORT_ICOUNT_SHIFT")
+    return int(found.group(1))
 
 
 def build_qemu_board(model: Model, tables: Any) -> Path:
@@ -65,9 +73,9 @@ class QemuBoard:
     """QEMU running a protocol image, UART0 served on ``127.0.0.1:port``; ``url`` is pyserial's URL."""
 
     def __init__(self, image: Path, log: Path | None = None, *, start_timeout_s: float = 10.0) -> None:
-        if ICOUNT_SHIFT != PORT_ICOUNT_SHIFT:
+        if ICOUNT_SHIFT != port_icount_shift():
             raise EmulationError(f"the qemu-m7 protocol image counts instructions for -icount shift="
-                                 f"{PORT_ICOUNT_SHIFT}, QEMU runs with shift={ICOUNT_SHIFT}")
+                                 f"{port_icount_shift()}, QEMU runs with shift={ICOUNT_SHIFT}")
         self.image = Path(image)
         self.log = log or self.image.with_suffix(".qemu.log")
         self.start_timeout_s = start_timeout_s

@@ -28,11 +28,11 @@ def run_batch(x: Any, dtype: np.dtype, step: Callable[[np.ndarray], np.ndarray])
         return step(x)
 
 
-def zero_faulted(ops: Ops, ok: np.ndarray, x: np.ndarray, fields: Any, real_kind: str) -> dict[str, np.ndarray]:
+def zero_faulted(ops: Ops, ok: np.ndarray, x: np.ndarray, fields: Any) -> dict[str, np.ndarray]:
     """Each input field with the faulted lanes (``~ok``) zeroed: real fields in the format,
     the others (indices) as ``np.intp``.  ``fields``: the record's fields (name, kind)."""
     zero = ops.const(0.0)
-    return {f.name: ops.where(ok, x[f.name], zero) if f.kind == real_kind
+    return {f.name: ops.where(ok, x[f.name], zero) if f.kind == REAL
             else np.where(ok, x[f.name], 0).astype(np.intp) for f in fields}
 
 
@@ -57,4 +57,4 @@ def begin_step(nf: NumberFormat, consts: Iterable[Const], x: np.ndarray, fault: 
     """The common start of a reference step in format ``nf`` over the batch ``x`` whose guard gave ``fault``."""
     ok = fault == 0
     return StepFrame(nf, nf.ops, Constants(consts), len(x), outputs.bind(nf).zeros(len(x)), fault, ok,
-                     nf.ops.const(0.0), zero_faulted(nf.ops, ok, x, inputs.fields, REAL))
+                     nf.ops.const(0.0), zero_faulted(nf.ops, ok, x, inputs.fields))

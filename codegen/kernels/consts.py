@@ -41,7 +41,7 @@ class Constants:
 
 
 def guard_limits(model: Model, dc_min: str, dc_max: str, dc_scale: float) -> dict[str, float]:
-    """Input-guard limits (numerics.md "Inputs are guarded"), float64, in guard order.
+    """Input-guard limits (numerics.md "Input guard and safe decision"), float64, in guard order.
 
     The DC-link limits are ``inverter.udc_min_v`` / ``udc_max_v`` times
     ``dc_scale`` under the names ``dc_min`` / ``dc_max`` (a split DC link

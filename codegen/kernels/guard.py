@@ -1,4 +1,4 @@
-"""The input guard as data (numerics.md "Inputs are guarded").
+"""The input guard as data (numerics.md "Input guard and safe decision").
 
 A topology describes its guard as a tuple of checks; :func:`evaluate` is the
 Python evaluation, ``templates/common/kernels.j2`` ``guard_fn`` the C one.

@@ -195,7 +195,7 @@ class Fixed:
         sc = self._sc()
         return {"interleave": 1,  # the int64 helpers gain nothing from interleaved chains (more spills)
                 "q_frac_bits": sc.frac_bits,
-                "q_lits": {"0": "INT32_C(0)", "0.5": self.literal(sc.const(0.5, "")),
+                "q_lits": {"0.5": self.literal(sc.const(0.5, "")),
                            "1": self.literal(sc.const(1.0, ""))}}
 
 

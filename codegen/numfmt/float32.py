@@ -154,7 +154,8 @@ class Float32:
     ops: Float32Ops = field(default_factory=Float32Ops)
     scaling: Any = None
     quantised: bool = False
-    #: the sin/cos range reduction is exact for |n| <= 163 (codegen.kernels.trig)
+    #: |theta_e| <= 256 rad: |n| <= 163 quadrants, inside the exact range |n| <= 512 of the sin/cos
+    #: range reduction (codegen.kernels.trig)
     angle_guard_rad: float = 256.0
 
     def const(self, x: float, unit: str = "") -> np.float32:

@@ -25,7 +25,7 @@ from codegen.records import RecordLayout
 from codegen.simulator.api import SimApi
 from codegen.simulator.records import SimStruct
 
-#: Largest RK4 sub-step (plant-and-metrics.md "Integration": at most 1 us).
+#: Largest RK4 sub-step (docs/simulation.md "Plant": at most 1 us).
 MAX_SUBSTEP_S = 1e-6
 #: Periods per <topology>_sim_run call (one progress report per chunk).
 DEFAULT_CHUNK = 10_000
@@ -80,11 +80,6 @@ def scenario_arrays(model: Model) -> tuple[np.ndarray, np.ndarray]:
     return speed, load
 
 
-def _plant_value(override: float | None, controller_value: float) -> float:
-    """The plant's value of a parameter: the ``[plant]`` override, else the controller's model's."""
-    return float(override) if override is not None else float(controller_value)
-
-
 def fill_common_params(p: Any, model: Model) -> Any:
     """Set the shared parameters ``p.common``; return ``p``.
 
@@ -95,15 +90,15 @@ def fill_common_params(p: Any, model: Model) -> Any:
     the speed mode, and the inverter and sensor non-idealities of
     ``[plant]`` (0 = off; the ADC full scale defaults to ``inverter.i_trip_a``).
     """
-    m, inv, c, sl, pl = model.motor, model.inverter, model.controller, model.speed_loop, model.plant
+    m, c, sl, pl = model.motor, model.controller, model.speed_loop, model.plant
     common = p.common
-    common.rs_ohm = _plant_value(pl.rs_ohm, m.rs_ohm)
-    common.ld_h = _plant_value(pl.ld_h, m.ld_h)
-    common.lq_h = _plant_value(pl.lq_h, m.lq_h)
-    common.psi_f_wb = _plant_value(pl.psi_f_wb, m.psi_f_wb)
+    common.rs_ohm = pl.value("rs_ohm", model)
+    common.ld_h = pl.value("ld_h", model)
+    common.lq_h = pl.value("lq_h", model)
+    common.psi_f_wb = pl.value("psi_f_wb", model)
     common.pole_pairs = int(m.pole_pairs)
-    common.j_kgm2 = _plant_value(pl.j_kgm2, m.j_kgm2)
-    common.b_nms = _plant_value(pl.b_nms, m.b_nms)
+    common.j_kgm2 = pl.value("j_kgm2", model)
+    common.b_nms = pl.value("b_nms", model)
     common.udc_v = plant_udc_v(model)
     common.dt_s = c.dt_s
     common.kp = sl.kp
@@ -116,7 +111,7 @@ def fill_common_params(p: Any, model: Model) -> Any:
     common.current_gain_error = float(pl.current_gain_error)
     common.current_offset_a = float(pl.current_offset_a)
     common.adc_bits = int(pl.adc_bits)
-    common.adc_full_scale_a = _plant_value(pl.adc_full_scale_a, inv.i_trip_a)
+    common.adc_full_scale_a = pl.value("adc_full_scale_a", model)
     common.noise_a = float(pl.noise_a)
     common.noise_seed = int(pl.noise_seed)
     common.encoder_bits = int(pl.encoder_bits)
@@ -126,13 +121,7 @@ def fill_common_params(p: Any, model: Model) -> Any:
 
 def plant_udc_v(model: Model) -> float:
     """The plant's DC-link voltage (``plant.udc_v``, else ``inverter.udc_v``); the controller measures it."""
-    return _plant_value(model.plant.udc_v, model.inverter.udc_v)
-
-
-def delay_periods(model: Model) -> int:
-    """The plant's actuation delay d in periods (``plant.actuation_delay_periods``, else 1 with
-    ``controller.delay_compensation``, 0 without)."""
-    return int(model.plant.delay_periods(model.controller.delay_compensation))
+    return model.plant.value("udc_v", model)
 
 
 def trace_fields(trace: SimStruct) -> dict[str, tuple[np.dtype, int]]:

@@ -41,7 +41,7 @@ import struct
 import subprocess
 from collections.abc import Iterable, Iterator
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -49,7 +49,7 @@ import numpy as np
 
 from codegen.errors import MpcgenError
 from codegen.model import Model
-from codegen.stages.fwdata import evenly_spaced
+from codegen.stages.fwdata import N_BENCH, evenly_spaced
 
 __all__ = ["MCA_ARGS", "CycleEstimate", "CycleError", "Elf", "StepTracer", "cycle_bound", "estimate_cycles",
            "mca_cycles", "llvm_mca", "strategy_cycles", "METHOD_NOTE"]
@@ -286,8 +286,6 @@ class CycleEstimate:
     paths: int
     cycles: np.ndarray  # per traced state
     instructions: np.ndarray  # per traced state (executed instructions of the path)
-    mismatches: int = 0
-    distinct: dict[str, int] = field(default_factory=dict)  # path digest -> cycles
 
     @property
     def summary(self) -> dict[str, float]:
@@ -336,7 +334,7 @@ def estimate_cycles(elf_path: Path, symbol: str, states: np.ndarray, expected: n
     with ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
         cyc = dict(zip(paths, pool.map(mca_cycles, paths.values())))
     return CycleEstimate(len(idx), len(paths), np.array([cyc[k] for k in keys], dtype=np.float64),
-                         np.array(n_instr, dtype=np.float64), mismatches, cyc)
+                         np.array(n_instr, dtype=np.float64))
 
 
 # ---------------------------------------------------------------- lower bound
@@ -366,7 +364,7 @@ def cycle_bound(ops: dict[str, dict[str, int]], n_eval: np.ndarray, n_members: n
                               np.ceil((fp_issue + mem) / ISSUE_WIDTH)])
 
 
-def strategy_cycles(model: Model, tables: Any, elf_path: Path, *, n_bench: int = 2000, max_states: int = 256) -> dict:
+def strategy_cycles(model: Model, tables: Any, elf_path: Path, *, n_bench: int = N_BENCH, max_states: int = 256) -> dict:
     """Estimate and bound of one strategy's image (``model`` the strategy's variant): the bench
     states the image embeds (the topology's trajectory, ``n_bench`` evenly spaced, in the step's
     format), at most ``max_states`` of them traced.  JSON-ready figures."""

@@ -36,7 +36,7 @@ from codegen.stages.firmware import (
     require_tools,
     write_firmware_project,
 )
-from codegen.stages.fwdata import layouts
+from codegen.stages.fwdata import N_BENCH, layouts
 
 #: SysTick clock of mps2-an500 (processor clock, CLKSOURCE=1).
 SYSTICK_HZ = 25_000_000
@@ -204,7 +204,7 @@ class StrategyCounts:
 
 
 def run_and_check(model: Model, tables: Any, workdir: Path, *, n_selftest: int = 10000,
-                  n_bench: int = 2000, icount_shift: int = ICOUNT_SHIFT, timeout_s: float = 300.0) -> StrategyCounts:
+                  n_bench: int = N_BENCH, icount_shift: int = ICOUNT_SHIFT, timeout_s: float = 300.0) -> StrategyCounts:
     """Write, build and run one qemu-m7 image; check it against the reference; count instructions.
 
     The firmware compares every output with its embedded expected outputs;

@@ -36,6 +36,7 @@ from codegen.records import REAL, RecordLayout
 from codegen.render import environment
 from codegen.resources import firmware_dir
 from codegen.stages.fwdata import (
+    N_BENCH,
     SELFTEST_SEED,
     expected_outputs,
     in_step_format,
@@ -225,7 +226,7 @@ def _sources(board: Board, outdir: Path, prefix: str, protocol: ProtocolBuild | 
 
 
 def write_firmware_project(model: Model, tables: Any, board: str, outdir: Path,
-                           n_selftest: int = 10000, *, n_bench: int = 2000,
+                           n_selftest: int = 10000, *, n_bench: int = N_BENCH,
                            seed: int = SELFTEST_SEED, protocol: ProtocolBuild | None = None) -> list[Path]:
     """Write a buildable firmware project for ``board`` into ``outdir``; return the files written.
 

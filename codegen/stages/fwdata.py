@@ -47,6 +47,10 @@ def selftest_states(model: Model, tables: Any, n: int, seed: int = SELFTEST_SEED
     return in_step_format(model, tables, topology_of(model).selftest_states(model, tables, n, seed))
 
 
+#: states of the bench trajectory a firmware image embeds (timed on the board, traced by the cycle estimate)
+N_BENCH = 2000
+
+
 def evenly_spaced(x: np.ndarray, n: int) -> np.ndarray:
     """``n`` records (at most ``len(x)``) evenly spaced over ``x``, first and last included."""
     idx = np.linspace(0, len(x) - 1, num=min(n, len(x))).round().astype(np.intp)

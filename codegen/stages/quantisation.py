@@ -34,6 +34,7 @@ from codegen.errors import UsageError
 from codegen.model import Model
 from codegen.numfmt import FLOAT_CONTROLLER, IDEAL, QUANTISED, number_format
 from codegen.records import REAL, RecordLayout
+from codegen.stages.fwdata import evenly_spaced
 from codegen.teststates import in_format
 from codegen.topology import topology_of
 
@@ -171,18 +172,17 @@ def _closed_loop(model_fx: Model, model_32: Model, strategies: list[str], log: L
     return out
 
 
-def _subsample(x: np.ndarray, n: int | None) -> np.ndarray:
-    if n is None or len(x) <= n:
-        return x
-    return x[np.linspace(0, len(x) - 1, n).astype(np.intp)]
+def _at_most(x: np.ndarray, n: int | None) -> np.ndarray:
+    """At most ``n`` of the records ``x``, evenly spaced (all of them for None)."""
+    return x if n is None else evenly_spaced(x, n)
 
 
 def analyse(model: Model, strategies: list[str] | None = None, random_states: int = 20_000,
-            max_closed_loop: int | None = None, closed_loop: bool = True, log: Log = lambda s: None,
+            max_closed_loop: int | None = None, log: Log = lambda s: None,
             traces: Path | None = None) -> dict[str, Any]:
     """The quantisation analysis (module doc, a-d) of the fixed-point ``model`` for ``strategies``
     (default: every strategy of its topology).  ``max_closed_loop``: at most this many of the recorded
-    closed-loop states (evenly spaced); ``closed_loop``: run (d); ``traces``: directory the closed-loop
+    closed-loop states (evenly spaced); ``traces``: directory the closed-loop
     runs' time series are written to (``fixed.npz``, ``float32.npz``).  JSON-ready dict."""
     if not number_format(model.controller.number_format).quantised:
         raise UsageError(f"the quantisation report is about fixed point; {model.source} has "
@@ -197,11 +197,11 @@ def analyse(model: Model, strategies: list[str] | None = None, random_states: in
         t_fx, t_32 = topo.derive(m_fx), topo.derive(m_32)
         lib = topo.host_library(m_32, t_32, with_sim=True)
         log(f"quantisation {model.name} / {s}: recording the float32 closed-loop states")
-        cl32 = _subsample(topo.closed_loop_states(m_32, lib), max_closed_loop)
+        cl32 = _at_most(topo.closed_loop_states(m_32, lib), max_closed_loop)
         rnd32 = topo.random_states(m_32, t_32, random_states, 1)
         cl_fx = in_format(cl32, topo.input_record.bind(t_fx.nf))
         log(f"quantisation {model.name} / {s}: recording the fixed-point closed-loop states")
-        own_fx = _subsample(topo.closed_loop_states(m_fx, topo.host_library(m_fx, t_fx, with_sim=True)),
+        own_fx = _at_most(topo.closed_loop_states(m_fx, topo.host_library(m_fx, t_fx, with_sim=True)),
                             max_closed_loop)
         own32 = _convert(own_fx, topo.input_record.bind(t_fx.nf), topo.input_record.bind(t_32.nf))
         rnd_fx = in_format(rnd32, topo.input_record.bind(t_fx.nf))
@@ -223,9 +223,8 @@ def analyse(model: Model, strategies: list[str] | None = None, random_states: in
         }
     out: dict[str, Any] = {"config": model.name, "config_hash": model.config_hash(), "topology": topo.name,
                            "strategies": per}
-    if closed_loop:
-        cl = _closed_loop(model, model.with_controller(number_format=FLOAT_CONTROLLER, fixed_q=None), chosen, log, traces)
-        for s in chosen:
-            per[s]["closed_loop"] = cl[s]
+    cl = _closed_loop(model, model.with_controller(number_format=FLOAT_CONTROLLER, fixed_q=None), chosen, log, traces)
+    for s in chosen:
+        per[s]["closed_loop"] = cl[s]
     return out
 

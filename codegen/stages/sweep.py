@@ -40,7 +40,7 @@ import numpy as np
 
 from codegen.config import INT, REAL, SCHEMA, load_config, parse_override
 from codegen.errors import ConfigError, UsageError
-from codegen.model import Model
+from codegen.model import PLANT_DEFAULTS, Model
 
 __all__ = ["Axis", "Spread", "Plan", "parse_param", "parse_spread", "build_plan", "command",
            "MAX_AXIS_VALUES", "MAX_RUNS"]
@@ -51,12 +51,6 @@ Log = Callable[[str], None]
 MAX_AXIS_VALUES = 1000
 #: most runs one sweep may plan (grid points times Monte Carlo draws)
 MAX_RUNS = 100_000
-#: plant parameter overrides whose unset (None) value means "the controller's": that value's field
-PLANT_NOMINAL = {
-    "plant.rs_ohm": "motor.rs_ohm", "plant.ld_h": "motor.ld_h", "plant.lq_h": "motor.lq_h",
-    "plant.psi_f_wb": "motor.psi_f_wb", "plant.j_kgm2": "motor.j_kgm2", "plant.b_nms": "motor.b_nms",
-    "plant.udc_v": "inverter.udc_v", "plant.c_f": "inverter.c_f",
-}
 #: command-line shortcuts of the config arguments (as ``mpcgen`` applies them) -> field
 _SHORTCUTS = (("strategy", "controller.strategy"), ("predictor", "controller.predictor"),
               ("tables", "controller.tables"), ("number_format", "controller.number_format"),
@@ -209,8 +203,9 @@ def field_value(model: Model, name: str) -> object:
 def nominal(model: Model, name: str) -> float:
     """The value a spread is centred on (an unset plant override: the controller's value)."""
     v = field_value(model, name)
-    if v is None and name in PLANT_NOMINAL:
-        v = field_value(model, PLANT_NOMINAL[name])
+    section, _, attr = name.partition(".")
+    if v is None and section == "plant" and attr in PLANT_DEFAULTS:
+        v = model.plant.value(attr, model)
     if not isinstance(v, (int, float)) or isinstance(v, bool) or not math.isfinite(v):
         raise UsageError(f"--spread {name}: the config gives it no numeric value to spread around; "
                          f"set one with --set {name}=VALUE")
@@ -240,15 +235,13 @@ def build_plan(config: str, model: Model, base: dict[str, object], strategies: l
         raise UsageError(f"--monte-carlo = {monte_carlo}, --seed = {seed}: must be integers >= 0")
     axes = [parse_param(t) for t in params]
     sp = [parse_spread(t) for t in spreads]
+    if sp and not monte_carlo:
+        raise UsageError("--spread goes with --monte-carlo N (the number of runs)")
     if not axes and not monte_carlo:
-        if sp:
-            raise UsageError("--spread goes with --monte-carlo N (the number of runs)")
         raise UsageError("nothing to sweep: give --param SECTION.FIELD=LIST_OR_RANGE and/or "
                          "--monte-carlo N with --spread SECTION.FIELD=+-PCT")
     if monte_carlo and not sp:
         raise UsageError(f"--monte-carlo {monte_carlo} needs at least one --spread SECTION.FIELD=+-PCT")
-    if sp and not monte_carlo:
-        raise UsageError("--spread goes with --monte-carlo N (the number of runs)")
     seen: set[str] = set()
     for name in [a.field for a in axes] + [s.field for s in sp]:
         if name in seen:

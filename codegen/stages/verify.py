@@ -21,6 +21,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from codegen.compare import describe_mismatch, mismatch_mask
+from codegen.errors import UsageError
 from codegen.model import Model
 from codegen.stages.fwdata import evenly_spaced
 from codegen.topology import topology_of
@@ -63,6 +64,7 @@ def verify_strategy(
     states for the rest.
     """
     t0 = time.perf_counter()
+    workers()  # a bad MPCGEN_JOBS is an error before anything is built
     topo = topology_of(model)
     tables = topo.derive(model)
     lib = topo.host_library(model, tables, with_sim=closed_loop)
@@ -78,8 +80,14 @@ def verify_strategy(
 
 
 def workers() -> int:
-    """Processes the reference runs in: every core (``MPCGEN_JOBS`` overrides)."""
-    return max(1, int(os.environ.get("MPCGEN_JOBS") or os.cpu_count() or 1))
+    """Processes the reference runs in: every core (``MPCGEN_JOBS`` overrides); UsageError for a
+    value that is not a positive integer."""
+    text = os.environ.get("MPCGEN_JOBS")
+    if not text:
+        return os.cpu_count() or 1
+    if not text.strip().isdigit() or int(text) < 1:
+        raise UsageError(f"MPCGEN_JOBS = {text!r}: must be a positive integer (the processes verify uses)")
+    return int(text)
 
 
 def compare_batches(strategy: str, parts: dict[str, np.ndarray], ref_step: Callable[[np.ndarray], np.ndarray],

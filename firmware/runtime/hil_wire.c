@@ -3,7 +3,6 @@
  */
 #include "hil_wire.h"
 
-#include <string.h>
 
 void hil_put_u16(uint16_t *o, uint16_t value)
 {
@@ -32,11 +31,6 @@ float hil_f32_from_bits(uint32_t bits)
     union { uint32_t bits; float value; } pun; /* C99 6.5.2.3: reading the other member reinterprets */
     pun.bits = bits;
     return pun.value;
-}
-
-uint32_t hil_i32_bits(int32_t value)
-{
-    return (uint32_t)value;
 }
 
 int32_t hil_i32_from_bits(uint32_t bits)

@@ -19,8 +19,8 @@ uint32_t hil_get_u32(const uint16_t *o);
 /* A float32 from its bits (the inverse of mpc_f32_bits). */
 float hil_f32_from_bits(uint32_t bits);
 
-/* Two's-complement bits of an int32_t, and back (no implementation-defined conversion). */
-uint32_t hil_i32_bits(int32_t value);
+/* An int32_t from its two's-complement bits (the inverse of mpc_i32_value; no
+ * implementation-defined conversion). */
 int32_t hil_i32_from_bits(uint32_t bits);
 
 #endif /* HIL_WIRE_H */

@@ -12,6 +12,12 @@
 #include "onboard.h"
 #include "onboard_config.h"
 
+/* This plant applies the decision of k one period late (the delay the T-type step compensates);
+ * the host comparison runs the same timing (hil/onboard.py). */
+#if ONB_DELAY_COMPENSATION == 0
+#error "on-board T-type plant: the step compensates a one-period delay; set controller.delay_compensation = true"
+#endif
+
 #define ONB_OOO 13u
 #define ONB_N_VECTORS 63u
 #define ONB_N_STATES 27u

@@ -115,7 +115,7 @@ void sim_period_sample(const sim_params_t *p, const sim_state_t *s, pmsm_state_t
         x->omega_m_rad_s = w_ref;
     }
 
-    /* 2. the plant at t_k (plant-and-metrics.md "Sampling"), and what the controller sees */
+    /* 2. the plant at t_k (docs/simulation.md "Plant"), and what the controller sees */
     pmsm_dq_phase_currents(x->i_d_a, x->i_q_a, x->theta_e_rad, &out->ia_plant, &out->ib_plant);
     out->th_plant = pmsm_dq_wrap_angle(x->theta_e_rad);
     out->ia = out->ia_plant;

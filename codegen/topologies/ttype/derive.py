@@ -97,7 +97,7 @@ DQ = DqModel("LS_H", "LS_H", "PSI_F_WB", "RS_OHM", "A_S", "A_S")
 
 
 def guard_limits(model: Model) -> dict[str, float]:
-    """Input-guard limits (numerics.md "Inputs are guarded"), float64: each capacitor at half the DC link's."""
+    """Input-guard limits (numerics.md "Input guard and safe decision"), float64: each capacitor at half the DC link's."""
     return shared_guard_limits(model, "UC_MIN_V", "UC_MAX_V", 0.5)
 
 

@@ -32,10 +32,15 @@ REDUCED = ("torque ripple", "flux ripple", "i_a THD")
 
 
 def _motor_differs(model: Model) -> str | None:
+    """The first motor or inverter field in which the config is not the paper's setup (Table 4, section 3.1)."""
     m, s = model.motor, pub.TABLE4_MOTOR
     for f in ("rs_ohm", "ld_h", "lq_h", "psi_f_wb", "pole_pairs", "rated_speed_rpm", "rated_torque_nm"):
         if not math.isclose(float(getattr(m, f)), float(getattr(s, f)), rel_tol=1e-9):
             return f
+    for name, ours, paper in (("inverter.udc_v", model.inverter.udc_v, pub.UDC_V),
+                              ("controller.dt_s", model.controller.dt_s, pub.TS_S)):
+        if not math.isclose(ours, paper, rel_tol=1e-9):
+            return name
     return None
 
 
@@ -48,8 +53,8 @@ def paper_table(model: Model, data: dict[str, Any]) -> dict[str, Any]:
     """Published vs ours for a ``simulate`` result ``data``; JSON-ready with a printable ``_table``."""
     field = _motor_differs(model)
     if field is not None:
-        return no_figures(f"{model.name}'s motor differs from seed 000's Table 4 motor ({field}); Table 5 "
-                          "belongs to that motor")
+        return no_figures(f"{model.name} differs from seed 000's setup (Table 4 motor, Udc and Ts of "
+                          f"section 3.1) in {field}; Table 5 belongs to that setup")
     if data.get("scenario_set") != "mpdtc-table5":
         return no_figures(f"seed 000 publishes Table 5 for its steady runs (scenario.set = \"mpdtc-table5\"); "
                           f"{model.name} runs scenario.set = \"{data.get('scenario_set')}\"")
@@ -92,7 +97,6 @@ def paper_table(model: Model, data: dict[str, Any]) -> dict[str, Any]:
     ratios.append({"name": "Cal_ave 63 / 27 / % (ours, not time)", "speed_rpm": None, "published": None,
                    "ours": percent(o63.get("Cal_ave"), o27.get("Cal_ave"))})
 
-    lines: list[str] = []
     win = rows[0]["window_s"] if rows else [None, None]
     head = "".join(f" {pair_head(h, spec)}  " for _k, _f, h, spec in COLUMNS)
     lines = [f"paper: seed 000 Table 5 (steady state, T* = {pub.TABLE4_MOTOR.rated_torque_nm:g} N*m), published | "

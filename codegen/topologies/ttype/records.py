@@ -64,7 +64,7 @@ OUTPUT_FIELDS: tuple[Field, ...] = fields("""
 FIRST_VIRTUAL = 27
 N_IDS = 63
 
-#: The input guard as data (numerics.md "Inputs are guarded"), evaluated by codegen.kernels.guard.
+#: The input guard as data (numerics.md "Input guard and safe decision"), evaluated by codegen.kernels.guard.
 GUARD: tuple[Check, ...] = motor_checks() + (
     AllAtLeast("UDC_LOW", ("uc1_v", "uc2_v"), "UC_MIN_V"),
     AllAtMost("UDC_HIGH", ("uc1_v", "uc2_v"), "UC_MAX_V"),

@@ -1,7 +1,7 @@
 """Python reference of the three-level MPDTC step, vectorised, through the number format's ops.
 
 One ``ops`` helper per C operation, in the C's order
-(numerics.md "Expression order is fixed"), over a batch of input records of
+(numerics.md "One rounding per operation, fixed order"), over a batch of input records of
 ``interface.INPUT_DTYPE``.  The generated C (templates/ttype/mpc.c.j2)
 is the other, independent implementation of the same sequence;
 ``codegen.topologies.ttype.verify`` proves the two equal bit for bit.

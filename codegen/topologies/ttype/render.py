@@ -6,7 +6,7 @@ only in placement attributes and comments, the arithmetic is identical.
 from __future__ import annotations
 
 from codegen.model import Model
-from codegen.render import TableRow, render_step, render_step_cdef, step_context, table_fields
+from codegen.render import TableRow, render_step, render_step_cdef, sincos_bound, step_context, table_fields
 from codegen.topologies.ttype import virtual as vv
 from codegen.topologies.ttype.derive import DQ, ThreeLevelTables
 from codegen.topologies.ttype.records import (
@@ -42,7 +42,10 @@ def three_level_context(model: Model, t: ThreeLevelTables, target: str) -> dict:
         **table_fields(t), "topology_macro": "MPC_TOPOLOGY_THREE_LEVEL", "guard": GUARD, "dq": DQ,
         "first_virtual": FIRST_VIRTUAL, "seq": seq, "seq_pat": seq_pat, "groups": groups, "group_n": t.group_n,
         "max_members": mm, "rows": rows, "row_n": t.row_n, "max_groups": mg, "n_segments": N_SEGMENTS,
-        "n_max_eval": N_MAX_EVAL, "safe_state": SAFE_STATE})
+        "n_max_eval": N_MAX_EVAL, "safe_state": SAFE_STATE,
+        "sincos_bound": sincos_bound(float(t.nf.decode("rad", t.const("ANGLE_GUARD_RAD")))
+                                     + 2.0 * float(t.nf.decode("rad/s", t.const("OMEGA_GUARD_RAD_S")))
+                                     * float(t.nf.decode("s", t.const("TS_S"))), "ANGLE_GUARD_RAD + 2 w Ts")})
 
 
 def render_three_level(model: Model, tables: ThreeLevelTables, target: str) -> dict[str, str]:

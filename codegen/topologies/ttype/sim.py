@@ -47,12 +47,7 @@ from codegen.simulator.driver import (
     trace_class,
 )
 from codegen.simulator.records import SIM_PARAMS, SIM_STATE, SIM_TRACE, SimStruct
-from codegen.topologies.ttype.records import INPUT
-
-#: Segments per control period.
-N_SEG = 7
-#: State index of OOO (applied before the first decision).
-OOO = 13
+from codegen.topologies.ttype.records import INPUT, N_SEGMENTS
 
 PARAMS = SimStruct("ttype_sim_params_t", "T-type simulator parameters", Record("ttype_sim_params", fields("""
     c_f            f64   1  each DC-link capacitor C1 = C2, F
@@ -71,7 +66,7 @@ STATE = SimStruct("ttype_sim_state_t", "T-type carried state", Record("ttype_sim
     prior_seg_s     f64   N_SEG  its segment durations, s
     last_state      i32   1      state at the end of the previous period (13 = OOO)
     sampled_vo_v    f64   1      plant V_o at t_k - measurement_delay_s, V
-""", N_SEG=N_SEG)), base=SIM_STATE)
+""", N_SEG=N_SEGMENTS)), base=SIM_STATE)
 
 TRACE = SimStruct("ttype_sim_trace_t", "T-type trace", Record("ttype_sim_trace", fields("""
     vo_v            f64   1      plant neutral-point voltage at t_k, V
@@ -86,7 +81,7 @@ TRACE = SimStruct("ttype_sim_trace_t", "T-type trace", Record("ttype_sim_trace",
     uab_v           f64   N_SEG  u_ab per applied segment (V_o at the segment start), V
     seg_s           f64   N_SEG  applied segment durations, s (0: skipped)
     seg_states      u16   N_SEG  applied states per segment
-""", N_SEG=N_SEG)), base=SIM_TRACE, pointers=True)
+""", N_SEG=N_SEGMENTS)), base=SIM_TRACE, pointers=True)
 
 SIM = api.SimApi("ttype", PARAMS, STATE, TRACE, Path(__file__).resolve().parent / "csrc", {
     -1: "invalid simulator arguments (motor/inverter/speed-loop parameters)",
@@ -137,7 +132,7 @@ def params_from_model(ffi: Any, model: Model, substep_max_s: float | None = None
     when ``scenario.speed_mode == "imposed"`` (T* is then the load torque).
     """
     p = fill_common_params(ffi.new(f"{PARAMS.ctype} *"), model)
-    p.c_f = model.plant.c_f if model.plant.c_f is not None else model.inverter.c_f
+    p.c_f = model.plant.value("c_f", model)
     p.substep_max_s = float(substep_max_s) if substep_max_s is not None else MAX_SUBSTEP_S
     return p
 

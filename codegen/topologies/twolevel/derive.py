@@ -66,7 +66,7 @@ DQ = DqModel("LD_H", "LQ_H", "PSI_F_WB", "RS_OHM", "A_D", "A_Q")
 
 
 def guard_limits(model: Model) -> dict[str, float]:
-    """Input-guard limits (numerics.md "Inputs are guarded"), float64."""
+    """Input-guard limits (numerics.md "Input guard and safe decision"), float64."""
     return shared_guard_limits(model, "UDC_MIN_V", "UDC_MAX_V", 1.0)
 
 

@@ -28,17 +28,18 @@ def essential_ops(tables: Any) -> dict[str, dict[str, int]]:
     else:
         fp += 1 + 2 + 3 + 4 + 3 + 6 + 6  # |V|, V cos/sin, flux, torque, |psi|^2, inverse Park, Euler bases
         fp += 8 + 3 if tables.delay_compensation else 0
-    if getattr(tables, "psi_ref", "constant") != "constant":
+    if tables.psi_ref != "constant":
         fp += 3 + 1  # flux reference from the torque reference (table slope) and its inverse
     if tables.uses_threshold:
         fp += 3  # |T* - Te| <= eps
         if tables.n_sectors > 1:
             fp += 6 + (1 if tables.n_conditions == 2 else 2)  # 12-sector test, condition signs
-    per_cand_fp = 4 + 4 + 3 + 7 + 1  # flux predictor, torque, |psi|^2, cost, compare with the best
-    if getattr(tables, "cost", "rated") != "rated":
-        per_cand_fp += 1
-    if not geo:
+    if geo:
+        per_cand_fp = 4 + 4 + 3 + 7 + 1  # flux predictor, torque, |psi|^2, cost, compare with the best
+    else:
         per_cand_fp = 9 + 3 + 4 + 3 + 7 + 1  # Euler current step, flux, torque, |psi|^2, cost, compare
+    if tables.cost != "rated":
+        per_cand_fp += 1  # the reference cost's weight w^2
     n_const = 14 + SINCOS_LOADS
     return {
         "per_step": {"fp": fp, "sqrt": 1, "div": 0, "load": 6 + n_const + 1, "store": 14},

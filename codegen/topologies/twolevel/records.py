@@ -41,7 +41,7 @@ OUTPUT_FIELDS: tuple[Field, ...] = fields("""
     cand          u16   N_VECTORS  candidate vector j in evaluation order; 0 beyond n_eval
 """, N_VECTORS=N_VECTORS)
 
-#: The input guard as data (numerics.md "Inputs are guarded"), evaluated by codegen.kernels.guard.
+#: The input guard as data (numerics.md "Input guard and safe decision"), evaluated by codegen.kernels.guard.
 GUARD: tuple[Check, ...] = motor_checks() + (
     AllAtLeast("UDC_LOW", ("udc_v",), "UDC_MIN_V"),
     AllAtMost("UDC_HIGH", ("udc_v",), "UDC_MAX_V"),

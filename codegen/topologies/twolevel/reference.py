@@ -1,7 +1,7 @@
 """Python reference of the two-level MPTC step, vectorised, through the number format's ops.
 
 One ``ops`` helper per C operation, in the C's order (numerics.md
-"Expression order is fixed"), over a batch of input records.  The generated
+"One rounding per operation, fixed order"), over a batch of input records.  The generated
 C (templates/twolevel/mpc.c.j2) is the other, independent implementation of
 the same sequence; ``verify`` proves the two equal bit for bit.
 

@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from codegen.model import Model
-from codegen.render import TableRow, render_step, render_step_cdef, step_context, table_fields
+from codegen.render import TableRow, render_step, render_step_cdef, sincos_bound, step_context, table_fields
 from codegen.topologies.twolevel.derive import DQ, TwoLevelTables
 from codegen.topologies.twolevel.records import FAULT_BITS, GUARD, INPUT, N_VECTORS, OUTPUT
 
@@ -26,7 +26,8 @@ def two_level_context(model: Model, t: TwoLevelTables, target: str) -> dict:
     return step_context(model, target, (INPUT, OUTPUT), FAULT_BITS, **{
         **table_fields(t), "topology_macro": "MPC_TOPOLOGY_TWO_LEVEL", "guard": GUARD, "dq": DQ,
         "rows_padded": rows, "row_len": t.row_len,
-        "max_row_len": max(t.row_len), "min_row_len": min(t.row_len), "n_vectors": N_VECTORS})
+        "max_row_len": max(t.row_len), "min_row_len": min(t.row_len), "n_vectors": N_VECTORS,
+        "sincos_bound": sincos_bound(float(t.nf.decode("rad", t.const("ANGLE_GUARD_RAD"))), "ANGLE_GUARD_RAD")})
 
 
 def render_two_level(model: Model, t: TwoLevelTables, target: str) -> dict[str, str]:

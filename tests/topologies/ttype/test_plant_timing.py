@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 from codegen.model import Plant
-from codegen.topologies.ttype.sim import OOO, controller_inputs, params_from_model, run_closed_loop
+from codegen.topologies.ttype.records import SAFE_STATE as OOO
+from codegen.topologies.ttype.sim import controller_inputs, params_from_model, run_closed_loop
 from tests.fixtures.simbuild import assert_traces_identical, echo_mode
 
 from .conftest import seed000_model

@@ -40,7 +40,7 @@
  *
  * Motor: pmsm_dq.h (Ld and Lq may differ).
  *
- * Integration (plant-and-metrics.md "Integration"): within one segment the
+ * Integration (docs/simulation.md "Plant"): within one segment the
  * switching state is constant; the 5-state ODE (i_d, i_q, omega_m, theta_e,
  * V_o) -- the inverter voltage depends on V_o, the midpoint current on the
  * currents -- is integrated by pmsm_rk4.h (classic 4th-order Runge-Kutta) in

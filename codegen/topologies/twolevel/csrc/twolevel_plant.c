@@ -65,7 +65,7 @@ void twolevel_plant_voltage_ab(const sim_params_t *p, int sw, double *u_alpha_v,
 
 /* ---------------------------------------------------------------------------
  * Right-hand side f(x) of the plant ODE, x = (i_d, i_q, omega_m, theta_e),
- * given cos/sin of the stage angle (plant-and-metrics.md "Plant", motor):
+ * given cos/sin of the stage angle (docs/simulation.md "Plant"):
  *   u_d =  u_alpha*cos + u_beta*sin,  u_q = u_beta*cos - u_alpha*sin  (Park)
  *   (+ the device drops at the stage currents, sim_inverter.h, when on)
  *   di_d/dt, di_q/dt, dw_m/dt, dtheta_e/dt: pmsm_dq_derivs (pmsm_dq.h)

@@ -19,7 +19,7 @@
  *   u_q = -u_alpha*sin(theta_e) + u_beta*cos(theta_e)
  *   motor equations: pmsm_dq.h
  *
- * Integration (plant-and-metrics.md "Integration"): the inverter state is
+ * Integration (docs/simulation.md "Plant"): the inverter state is
  * constant over one call, so its alpha-beta voltage is constant; the 4-state
  * ODE is integrated by pmsm_rk4.h in `substeps` equal sub-steps (choose
  * substeps so that dt/substeps <= 1 us, e.g. 50 for dt = 50 us).  The
