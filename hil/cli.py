@@ -138,7 +138,9 @@ def _check_log(args: argparse.Namespace, model: Any) -> int:
     except (ValueError, KeyError) as exc:
         raise UsageError(f"--check-log = {args.check_log!r}: {exc}") from None
     print(f"{data['results']} logged results ({data.get('distinct_states', 0)} states) re-verified offline: "
-          f"mismatches {data['mismatches']}, results without a logged state {data['unmatched_results']}")
+          f"mismatches {data['mismatches']}, results without a logged state {data['unmatched_results']}, "
+          f"frames discarded (host->board {data['discarded_frames_out']}, board->host {data['discarded_frames_in']}), "
+          f"malformed batches {data['bad_batches']}, malformed results {data['bad_results']}")
     base._write_json(args.json, data)
     return base.EXIT_OK if data["mismatches"] == 0 and data["results"] > 0 else base.EXIT_FAIL
 

@@ -101,24 +101,32 @@ def check_log(model: Model, tables: Any, path: Path) -> dict[str, Any]:
     state_of: dict[int, bytes] = {}  # sequence number -> packed input record, latest request wins
     pairs: list[tuple[bytes, bytes]] = []
     unmatched = 0
+    # what the log holds that no result can be checked against: reported, never skipped silently
+    faults = {"discarded_frames_out": 0, "discarded_frames_in": 0, "bad_batches": 0, "bad_results": 0}
     for direction, data in chunks:
         for item in dec[direction].feed(data):
             if not isinstance(item, Frame):
+                faults[f"discarded_frames_{direction}"] += 1
                 continue
             if direction == "out" and item.type == Msg.STEP:
                 state_of[item.seq] = item.payload
             elif direction == "out" and item.type == Msg.BATCH:
                 body = item.payload[k:]
+                count = schema.batch_head.unpack(item.payload[:k])["count"][0] if len(item.payload) >= k else -1
+                if len(body) % in_w or len(body) // in_w != count:
+                    faults["bad_batches"] += 1
                 for i in range(len(body) // in_w):
                     state_of[(item.seq + i) & 0xFFFF] = body[i * in_w:(i + 1) * in_w]
-            elif direction == "in" and item.type == Msg.RESULT and len(item.payload) == out_w:
+            elif direction == "in" and item.type == Msg.RESULT and len(item.payload) != out_w:
+                faults["bad_results"] += 1
+            elif direction == "in" and item.type == Msg.RESULT:
                 st = state_of.get(item.seq)
                 if st is None:
                     unmatched += 1
                 else:
                     pairs.append((st, item.payload))
     if not pairs:
-        return {"log": str(path), "results": 0, "mismatches": 0, "unmatched_results": unmatched}
+        return {"log": str(path), "results": 0, "mismatches": 0, "unmatched_results": unmatched, **faults}
     states = schema.input.unpack(b"".join(p[0] for p in pairs), len(pairs))
     payloads = np.frombuffer(b"".join(p[1] for p in pairs), np.uint8).reshape(len(pairs), out_w)
     _, got = split_results(schema, payloads)
@@ -126,4 +134,4 @@ def check_log(model: Model, tables: Any, path: Path) -> dict[str, Any]:
     bad, per_field = mismatch_mask(ref, got)
     return {"log": str(path), "board": header.get("board"), "results": len(pairs),
             "distinct_states": len({p[0] for p in pairs}), "mismatches": int(bad.sum()),
-            "mismatch_fields": per_field, "unmatched_results": unmatched}
+            "mismatch_fields": per_field, "unmatched_results": unmatched, **faults}

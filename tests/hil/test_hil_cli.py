@@ -71,6 +71,7 @@ def test_log_is_re_verified_offline(tmp_path, capsys):
     assert main(["hil", str(SPMSM), *cfg, "--check-log", str(log), "--json", str(js), "-q"]) == 0
     data = json.loads(js.read_text())
     assert data["results"] >= 300 and data["distinct_states"] == 300 and data["mismatches"] == 0
+    assert data["discarded_frames_in"] == data["bad_results"] == data["bad_batches"] == 0
     # a fabricated answer: a valid frame whose outputs are all zero
     m = load_config(SPMSM, {"controller.tables": "published", "controller.strategy": "s1"})
     schema = Schema.of(m)
@@ -80,8 +81,13 @@ def test_log_is_re_verified_offline(tmp_path, capsys):
         fh.write(json.dumps({"t": 99.0, "dir": "out",
                              "hex": encode_frame(Msg.STEP, 60000, step_payload(schema, x)).hex()}) + "\n")
         fh.write(json.dumps({"t": 99.1, "dir": "in", "hex": bad.hex()}) + "\n")
+        # a RESULT one octet short and a frame that does not decode: counted, not skipped silently
+        short = encode_frame(Msg.RESULT, 60001, bytes(schema.result_octets - 1))
+        fh.write(json.dumps({"t": 99.2, "dir": "in", "hex": short.hex()}) + "\n")
+        fh.write(json.dumps({"t": 99.3, "dir": "in", "hex": (bytes([7, 1, 2, 3]) + b"\x00").hex()}) + "\n")
     assert main(["hil", str(SPMSM), *cfg, "--check-log", str(log), "--json", str(js), "-q"]) == 1
-    assert json.loads(js.read_text())["mismatches"] == 1
+    data = json.loads(js.read_text())
+    assert data["mismatches"] == 1 and data["bad_results"] == 1 and data["discarded_frames_in"] == 1
     capsys.readouterr()
     assert main(["hil", str(SPMSM), "--strategy", "s2", "--set", "controller.tables=published",
                  "--check-log", str(log), "-q"]) == 2  # another config: refused, naming both hashes
