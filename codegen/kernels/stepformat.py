@@ -21,7 +21,7 @@ import math
 from collections.abc import Iterable
 
 from codegen.errors import ConfigError
-from codegen.kernels.consts import Const, in_format
+from codegen.kernels.consts import Const, guard_limits, in_format
 from codegen.kernels.trig import sincos_constants
 from codegen.model import Model
 from codegen.numfmt import NumberFormat, number_format
@@ -38,7 +38,7 @@ CONST_FIELDS: dict[str, str] = {
     "TE_PSI": "motor.psi_f_wb", "INV_TE_PSI": "motor.psi_f_wb", "TE_GEO_K": "motor.ld_h",
     "PSI_REF_WB": "controller.psi_ref_wb", "INV_PSI_REF": "controller.psi_ref_wb",
     "INV_TN": "motor.rated_torque_nm", "EPS_T_NM": "controller.eps_t_nm", "RS_OHM": "motor.rs_ohm",
-    "VDT_K": "controller.dt_s", "A_D": "controller.dt_s", "A_Q": "controller.dt_s", "A_S": "controller.dt_s",
+    "VDT_K": "controller.dt_s", "VMAG_K": "controller.predictor", "A_D": "controller.dt_s", "A_Q": "controller.dt_s", "A_S": "controller.dt_s",
     "TS_S": "controller.dt_s", "INV_TS": "controller.dt_s", "TS3_S": "controller.dt_s", "TS6_S": "controller.dt_s",
     "TN_MIN_S": "controller.t_n_min_s", "K_VO": "inverter.c_f", "TWO_C": "inverter.c_f",
     "LAMBDA_PSI": "controller.lambda_psi_nm_per_wb", "LAMBDA_VO": "controller.lambda_vo_nm_per_v",
@@ -54,7 +54,7 @@ def motor_ranges(model: Model) -> tuple[BaseRanges, list[Signal]]:
     m, inv = model.motor, model.inverter
     i_max = 2.0 / math.sqrt(3.0) * inv.i_trip_a
     flux = m.psi_f_wb + max(m.ld_h, m.lq_h) * i_max
-    omega = 5.0 * m.rated_speed_rpm * 2.0 * math.pi / 60.0 * m.pole_pairs  # the speed guard
+    omega = guard_limits(model, "UDC_MIN_V", "UDC_MAX_V", 1.0)["OMEGA_GUARD_RAD_S"]  # the speed guard
     volts = max(inv.udc_max_v, omega * flux)
     base = BaseRanges(i_max_a=inv.i_trip_a, u_max_v=volts, omega_max_rad_s=omega, flux_max_wb=flux)
     sigs = [
