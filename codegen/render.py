@@ -122,12 +122,16 @@ def step_context(model: Model, target: str, records: tuple[Record, Record],
     fault bits) plus the topology's own ``values`` (constants, tables, guard checks ...)."""
     nf = number_format(model.controller.number_format).scaled(values.get("scaling"))
     real = [f for r in records for f in r.fields if f.kind == REAL]
+    limits = {name for c in values.get("guard", ()) for name in (c.limit, c.lo) if name}  # type: ignore[attr-defined]
+    guard_bits = {c.name: nf.guard_bits(c.value) for c in values.get("consts", ())  # type: ignore[attr-defined]
+                  if c.name in limits}
     return {
         **base_context(model, target),
         **nf.template_values(),
         "real_fields": [{"name": f.name, "q": nf.scaling.q(f.unit) if nf.scaling else 0}
                         for f in real],
         "faults": faults,
+        "guard_bits": {name: bits for name, bits in guard_bits.items() if bits is not None},
         "dt_s": model.controller.dt_s,
         "angle_guard_rad": nf.angle_guard_rad,
         "input_fields": records[0].bind(nf).members,

@@ -5,8 +5,10 @@ C must reproduce the recorded outputs on the recorded states bit for bit,
 and ``mpcgen simulate`` must reproduce the recorded metrics to the last bit.
 The files were re-recorded (today's field and key names) when the examples
 took the seed papers' plant timing and the IPMSM example its MTPA flux
-reference (issue 11); a change of behaviour is a re-recording, stated in its
-commit.
+reference (issue 11), and the T-type files again when the sin/cos quadrant
+became C99 roundf (issue 12: 5 adversarial states at theta_e = 0.7068583 rad
+and the 63-MPDTC metrics at 3000 rpm changed in their 8th digit); a change of
+behaviour is a re-recording, stated in its commit.
 """
 from __future__ import annotations
 

@@ -7,7 +7,7 @@ bit, and the accuracy of the approximation is a separately tested property.
 
 Algorithm (per numerics.md: explicit range reduction, then polynomials):
 
-1. quadrant   y = x * (2/pi);  n = trunc(y + copysign(0.5, y))   (nearest)
+1. quadrant   y = x * (2/pi);  fn = round(y) (nearest, halfway away from zero), n = (int)fn
 2. Cody-Waite r = (x - n*PIO2_HI) - n*PIO2_LO, |r| <= pi/4 (+ rounding);
    PIO2_HI has few enough significant bits that n*PIO2_HI is exact for
    |n| <= 2^(24 - PIO2_HI_BITS).
@@ -108,11 +108,9 @@ def sincos(ops: Ops, x: Any, consts: Any = None) -> tuple[Any, Any]:
 
 def _sincos(ops: Ops, x: Any, k: SinCosCoeffs) -> tuple[Any, Any]:
     x = ops.array(x)
-    half = ops.const(0.5)
     y = ops.mul(x, k.two_over_pi)
-    yr = ops.add(y, ops.where(ops.ge(y, ops.const(0.0)), half, ops.neg(half)))
-    n = ops.trunc_int(yr)
-    fn = ops.from_int(n)
+    fn = ops.round_away(y)
+    n = ops.trunc_int(fn)
     t = ops.mul(fn, k.pio2_hi)
     r = ops.sub(x, t)
     t = ops.mul(fn, k.pio2_lo)

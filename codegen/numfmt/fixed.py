@@ -131,6 +131,11 @@ class FixedOps:
     def from_int(self, n: Any) -> np.ndarray:
         return _sat(_i64(n) << self.g)
 
+    def round_away(self, a: Any) -> np.ndarray:
+        """The nearest integer (in the format), halfway cases away from zero: a +- 1/2 truncated."""
+        half = self.const(0.5)
+        return self.from_int(self.trunc_int(self.add(a, self.where(self.ge(a, 0), half, self.neg(half)))))
+
 
 @dataclass(frozen=True)
 class Fixed:
@@ -184,6 +189,9 @@ class Fixed:
 
     def c_value(self, x: float | np.generic) -> str:
         return self.literal(x)
+
+    def guard_bits(self, x: Any) -> str | None:
+        return None  # the counts are integers already: the guard compares them
 
     def encode(self, unit: str, x: Any) -> np.ndarray:
         return self._sc().encode(unit, x)

@@ -135,6 +135,12 @@ class Float32Ops:
         """Conversion to int32 by truncation toward zero (C's ``(int32_t)x``)."""
         return np.trunc(a).astype(np.int32)
 
+    def round_away(self, a: Any) -> np.ndarray:
+        """The nearest integral value, halfway cases away from zero, with the sign of ``a`` (C99's
+        ``roundf``, exact: |a| + 0.5 is exact in float64 for every float32)."""
+        a64 = np.asarray(a, np.float64)
+        return np.copysign(np.floor(np.abs(a64) + 0.5), a64).astype(self.real)
+
     def from_int(self, n: Any) -> np.ndarray:
         """Conversion of an integer to the format (C's ``(float)n``)."""
         return np.asarray(n).astype(self.real)
@@ -178,6 +184,12 @@ class Float32:
 
     def literal(self, x: float | np.generic) -> str:
         return c_float_literal(x)  # type: ignore[arg-type]
+
+    def guard_bits(self, x: Any) -> str | None:
+        v = np.float32(x)
+        if not (np.isfinite(v) and v >= np.finfo(np.float32).tiny):
+            return None
+        return f"0x{int(v.view(np.uint32)):08X}u"
 
     def c_value(self, x: float | np.generic) -> str:
         v = float(x)  # type: ignore[arg-type]

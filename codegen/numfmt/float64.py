@@ -9,6 +9,7 @@ the fixed-point step does.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -42,6 +43,9 @@ class Float64(Float32):
 
     def literal(self, x: float | np.generic) -> str:
         return repr(float(x))  # type: ignore[arg-type]
+
+    def guard_bits(self, x: Any) -> str | None:
+        return None  # no C spelling
 
     def c_value(self, x: float | np.generic) -> str:
         return self.literal(x)

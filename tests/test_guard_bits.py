@@ -1,0 +1,84 @@
+"""The float32 guard compares bit patterns (a fast path for all checks at once, then the exact checks);
+the reference compares values: the same faults for every input (limits exactly, one ulp either side,
+signed zeros, infinities, NaNs of either sign and any payload, subnormals), and the generated sin/cos
+quadrant rounding is C99's roundf."""
+from __future__ import annotations
+
+import ctypes
+import ctypes.util
+
+import numpy as np
+import pytest
+
+from codegen.kernels.guard import Check
+from codegen.numfmt.float32 import FLOAT32
+from codegen.stages.verify import mismatch_mask
+from codegen.topologies.ttype.records import GUARD as TTYPE_GUARD
+from codegen.topologies.twolevel.records import GUARD as TWO_LEVEL_GUARD
+from codegen.topology import topology_of
+
+from conftest import EXAMPLES, model_for
+
+CASES = {
+    "two-level": (EXAMPLES / "seed001_spmsm.toml", {"strategy": "conventional", "tables": "published"},
+                  TWO_LEVEL_GUARD),
+    "t-type": (EXAMPLES / "seed000_tlevel.toml", {"strategy": "mpdtc63"}, TTYPE_GUARD),
+}
+
+_SPECIAL_BITS = (0x7F800000, 0xFF800000, 0x7FC00000, 0xFFC00000, 0x7F800001, 0xFF800001, 0x7FFFFFFF,
+                 0xFFFFFFFF, 0x00000001, 0x80000001, 0x00000000, 0x80000000, 0x7F7FFFFF, 0xFF7FFFFF)
+
+
+def edge_values(limit: np.float32) -> np.ndarray:
+    """A limit's neighbourhood and every special float32 pattern."""
+    inf = np.float32(np.inf)
+    near = [limit, np.nextafter(limit, inf), np.nextafter(limit, np.float32(0))]
+    near += [-v for v in near]
+    return np.concatenate([np.array(near, np.float32), np.array(_SPECIAL_BITS, np.uint32).view(np.float32)])
+
+
+def edge_states(base: np.ndarray, check: Check, limit: np.float32) -> list[np.ndarray]:
+    """The base state with each checked field at each edge value (a range check under an index
+    condition: with the index at both ends of its range and just outside it)."""
+    rows = []
+    indices = (check.first - 1, check.first, check.last) if check.kind == "real_in_range_when" else (None,)
+    for field in check.fields:
+        for idx in indices:
+            for v in edge_values(limit):
+                x = base.copy()
+                x[field] = v
+                if idx is not None:
+                    x[check.index] = idx
+                rows.append(x)
+    return rows
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_bit_pattern_guard_gives_the_reference_faults(name: str) -> None:
+    path, overrides, guard = CASES[name]
+    m = model_for(path, **overrides)
+    topo = topology_of(m)
+    t = topo.derive(m)
+    base = topo.random_states(m, t, 1, seed=3)
+    rows = []
+    for check in guard:
+        if check.limit:
+            assert FLOAT32.guard_bits(t.const(check.limit)) is not None, check.limit  # the bit form is in use
+            rows += edge_states(base, check, np.float32(t.const(check.limit)))
+    x = np.concatenate(rows)
+    ref, c = topo.step_batch(t, x), topo.host_library(m, t).step_batch(x)
+    assert np.array_equal(ref["fault"], c["fault"])
+    assert len(np.unique(ref["fault"])) > 2  # both sides of every limit were reached
+    assert not mismatch_mask(ref, c)[0].any()
+
+
+def test_round_away_is_c99_roundf() -> None:
+    libm = ctypes.CDLL(ctypes.util.find_library("m"))
+    libm.roundf.restype, libm.roundf.argtypes = ctypes.c_float, [ctypes.c_float]
+    ulp_below_half = np.nextafter(np.float32(0.5), np.float32(0))
+    x = np.array([0.5, -0.5, 1.5, 2.5, -2.5, ulp_below_half, -ulp_below_half, 0.0, -0.0, -0.3, 162.49998, 163.5,
+                  8388607.5, 1e30, -1e30], np.float32)
+    x = np.concatenate([x, np.random.default_rng(7).uniform(-200, 200, 20_000).astype(np.float32)])
+    got = FLOAT32.ops.round_away(x)
+    want = np.array([libm.roundf(float(v)) for v in x], np.float32)
+    assert np.array_equal(got.view(np.uint32), want.view(np.uint32))  # equal bits, signed zeros included
