@@ -348,13 +348,18 @@ SQRT_CYCLES, DIV_CYCLES, ISSUE_WIDTH = 14, 16, 2
 def cycle_bound(ops: dict[str, dict[str, int]], n_eval: np.ndarray, n_members: np.ndarray | None = None
                 ) -> np.ndarray:
     """Per-state lower bound on the step's cycles: the essential operations (``Topology.essential_ops``:
-    per step + ``n_eval`` x per candidate + ``n_members`` x per member) at the core's issue limits,
-    every unit overlapping perfectly: max(FP issue, divider busy, memory, all instructions / 2)."""
+    per step + ``n_eval`` x per candidate + ``n_members`` x per member; with a ``first_candidate``
+    entry the first evaluated candidate counts that instead, e.g. a candidate whose prediction is the
+    estimate itself) at the core's issue limits, every unit overlapping perfectly:
+    max(FP issue, divider busy, memory, all instructions / 2)."""
     n_eval = np.asarray(n_eval, dtype=np.float64)
     n_mem = np.zeros_like(n_eval) if n_members is None else np.asarray(n_members, dtype=np.float64)
+    first = ops.get("first_candidate", ops["per_candidate"])
+    n_first = np.minimum(n_eval, 1.0)
 
     def total(key: str) -> np.ndarray:
-        return (ops["per_step"].get(key, 0) + n_eval * ops["per_candidate"].get(key, 0)
+        return (ops["per_step"].get(key, 0) + n_first * first.get(key, 0)
+                + (n_eval - n_first) * ops["per_candidate"].get(key, 0)
                 + n_mem * ops.get("per_member", {}).get(key, 0))
 
     fp, sqrt, div = total("fp"), total("sqrt"), total("div")

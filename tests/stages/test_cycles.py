@@ -39,6 +39,13 @@ def test_independent_operations_dual_issue():
     assert cycles.mca_cycles(["\tvadd.f32\ts0, s0, s3"] * 4) >= 4 * 3
 
 
+def test_the_model_holds_issue_behind_vsqrt():
+    # LLVM 14's in-order Cortex-M7 model writes results back in order: ten independent VADDs after a
+    # VSQRT.F32 wait for it (the lower bound lets the square-root unit overlap everything else)
+    adds = [f"\tvadd.f32\ts{d}, s3, s4" for d in range(5, 15)]
+    assert cycles.mca_cycles(["\tvsqrt.f32\ts0, s1", *adds]) >= cycles.mca_cycles(adds) + 12
+
+
 def test_objdump_forms_the_model_lacks_are_substituted():
     # IT blocks, vcmpe, compare with zero, VFP immediates, writeback with .w
     block = ["\tvcmpe.f32\ts13, s15", "\tvcmp.f32\ts11, #0", "\tvmrs\tAPSR_nzcv, fpscr", "\tit\thi",
@@ -54,6 +61,10 @@ def test_lower_bound_counts():
     b = cycles.cycle_bound(ops, np.array([0, 7]))
     assert b[0] == 10  # FP issue
     assert b[1] == 14 * 7  # the square-root unit
+    # a first candidate without prediction (V0 of the flux-geometry step): its counts replace one candidate's
+    ops["first_candidate"] = {"fp": 3, "sqrt": 0, "div": 0, "load": 0, "store": 0}
+    b = cycles.cycle_bound(ops, np.array([0, 1, 7]))
+    assert list(b) == [10, 13, 14 * 6]
 
 
 SOURCE = """

@@ -60,6 +60,12 @@ class TwoLevelTables(HasConsts):
     def row_len(self) -> tuple[int, ...]:
         return tuple(len(r) for r in self.rows)
 
+    @property
+    def v0_first(self) -> bool:
+        """Every row starts with V0 and the predictor is flux-geometry, whose V0 prediction
+        psi + 0 dt is the estimate itself: the step takes V0's Te+ and |psi+| from te and mag."""
+        return self.predictor == "flux-geometry" and all(r[0] == 0 for r in self.rows)
+
 
 #: the dq model's constants by name (codegen.kernels.dq; the templates' dq_fns and flux)
 DQ = DqModel("LD_H", "LQ_H", "PSI_F_WB", "RS_OHM", "A_D", "A_Q")

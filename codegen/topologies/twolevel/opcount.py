@@ -4,8 +4,10 @@ cycle lower bound of ``mpcgen bench --emulated`` (``codegen.stages.cycles_bound`
 Counts, not measurements: the FP operations (add, sub, mul, abs, compare,
 convert, select), square roots, divisions, loads (inputs, constants, table
 cells) and stores (outputs) the algorithm cannot do without, per step and per
-evaluated candidate (``n_eval``).  Float32 names; a fixed-point step does the
-same operations on integers.
+evaluated candidate (``n_eval``).  With flux-geometry and V0 first in every
+row, V0's prediction is the estimate itself: its first candidate counts only
+the cost.  Float32 names; a fixed-point step does the same operations on
+integers.
 """
 from __future__ import annotations
 
@@ -34,15 +36,17 @@ def essential_ops(tables: Any) -> dict[str, dict[str, int]]:
         fp += 3  # |T* - Te| <= eps
         if tables.n_sectors > 1:
             fp += 6 + (1 if tables.n_conditions == 2 else 2)  # 12-sector test, condition signs
+    cost_fp = 7 + 1 + (1 if tables.cost != "rated" else 0)  # cost (+ the reference cost's weight), compare
     if geo:
-        per_cand_fp = 4 + 4 + 3 + 7 + 1  # flux predictor, torque, |psi|^2, cost, compare with the best
+        per_cand_fp = 4 + 4 + 3 + cost_fp  # flux predictor, torque, |psi|^2
     else:
-        per_cand_fp = 9 + 3 + 4 + 3 + 7 + 1  # Euler current step, flux, torque, |psi|^2, cost, compare
-    if tables.cost != "rated":
-        per_cand_fp += 1  # the reference cost's weight w^2
+        per_cand_fp = 9 + 3 + 4 + 3 + cost_fp  # Euler current step, flux, torque, |psi|^2
     n_const = 14 + SINCOS_LOADS
-    return {
+    ops = {
         "per_step": {"fp": fp, "sqrt": 1, "div": 0, "load": 6 + n_const + 1, "store": 14},
         "per_candidate": {"fp": per_cand_fp, "sqrt": 1, "div": 0, "load": 3, "store": 2},
         "per_member": {"fp": 0, "sqrt": 0, "div": 0, "load": 0, "store": 0},
     }
+    if tables.v0_first:  # V0 first in every row: its Te+ and |psi+| are the estimate's, only its cost is essential
+        ops["first_candidate"] = {"fp": cost_fp, "sqrt": 0, "div": 0, "load": 0, "store": 2}
+    return ops
