@@ -131,6 +131,10 @@ class FixedOps:
     def from_int(self, n: Any) -> np.ndarray:
         return _sat(_i64(n) << self.g)
 
+    def rank_lt(self, a: Any, b: Any) -> np.ndarray:
+        """Cost ranking: the counts' order."""
+        return np.asarray(a < b)
+
     def round_away(self, a: Any) -> np.ndarray:
         """The nearest integer (in the format), halfway cases away from zero: a +- 1/2 truncated."""
         half = self.const(0.5)

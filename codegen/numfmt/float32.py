@@ -141,6 +141,12 @@ class Float32Ops:
         a64 = np.asarray(a, np.float64)
         return np.copysign(np.floor(np.abs(a64) + 0.5), a64).astype(self.real)
 
+    def rank_lt(self, a: Any, b: Any) -> np.ndarray:
+        """Cost ranking: ``a`` before ``b`` by their bit patterns as unsigned integers (the C's
+        ``rank_key``), the float order for the costs' values (>= +0; a NaN would rank last)."""
+        bits = np.dtype(f"u{np.dtype(self.real).itemsize}")
+        return np.asarray(np.ascontiguousarray(a, self.real).view(bits) < np.ascontiguousarray(b, self.real).view(bits))
+
     def from_int(self, n: Any) -> np.ndarray:
         """Conversion of an integer to the format (C's ``(float)n``)."""
         return np.asarray(n).astype(self.real)

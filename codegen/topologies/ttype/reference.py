@@ -251,7 +251,7 @@ def _step(t: ThreeLevelTables, x: np.ndarray) -> np.ndarray:
         e_v = o.mul(k.LAMBDA_VO, m_av)
         gc = o.add(e_t, e_p)
         gc = o.add(gc, e_v)
-        take = active & ((j == 0) | o.lt(gc, best))
+        take = active & ((j == 0) | o.rank_lt(gc, best))
         best = o.where(take, gc, best)
         best_v = np.where(take, m_v, best_v)
         best_tn = o.where(take, m_tn, best_tn)

@@ -172,7 +172,7 @@ def _step(t: TwoLevelTables, x: np.ndarray) -> np.ndarray:
             e_p = o.mul(e_p, wn)
         e_p = o.mul(e_p, e_p)
         g = o.add(g, e_p)
-        take = active & ((j == 0) | o.lt(g, best))
+        take = active & ((j == 0) | o.rank_lt(g, best))
         best = o.where(take, g, best)
         best_v = np.where(take, v, best_v)
         costs[:, j] = o.where(active, g, zf)
