@@ -66,6 +66,9 @@ METHOD_NOTE = ("estimated M7 cycles: the step's executed instruction path (the r
 
 #: instructions LLVM 14's Cortex-M7 model has no scheduling data for -> an equivalent with the same timing
 _SUBSTITUTES = {"vcmpe.f32": "vcmp.f32", "vcmpe.f64": "vcmp.f64", "vcmp.f32": "vcmp.f32", "vcmp.f64": "vcmp.f64"}
+#: calls: llvm-mca gives a call 100 cycles of latency (an untraced callee); the traced path holds the
+#: callee's instructions, so a call is the taken branch it is
+_CALLS = {"bl": "b", "blx": "bx"}
 
 _CODE_BASE, _CODE_SIZE = 0x0000_0000, 0x0040_0000
 _RAM_BASE, _RAM_SIZE = 0x2000_0000, 0x0040_0000
@@ -146,7 +149,8 @@ def mca_cycles(asm: list[str] | str) -> int:
     assembly, unified syntax) on the Cortex-M7 model.  An instruction the model has no data for is
     replaced by its equivalent (``vcmpe`` -> ``vcmp``; LLVM 14's model has no IT: ``it`` becomes a
     ``nop`` (one issue slot) and the instructions it makes conditional their unconditional forms, same
-    resources and latencies) or, failing that, CycleError."""
+    resources and latencies; a call ``bl`` becomes the branch ``b``, its callee being part of the
+    traced path) or, failing that, CycleError."""
     lines = asm.splitlines() if isinstance(asm, str) else list(asm)
     text = "\n".join(_without_it(_substitute(line) for line in lines)) + "\n.Lt:\n"
     r = subprocess.run([llvm_mca(), *MCA_ARGS], input=text, capture_output=True, text=True, timeout=300)
@@ -182,6 +186,8 @@ def _without_it(lines: Iterable[str]) -> Iterator[str]:
 
 def _substitute(line: str) -> str:
     parts = line.split(None, 1)
+    if parts and parts[0] in _CALLS:
+        return "\t" + _CALLS[parts[0]] + ("\t" + parts[1] if len(parts) > 1 else "")
     if parts and parts[0] in _SUBSTITUTES:
         ops = parts[1] if len(parts) > 1 else ""
         reg, _, imm = ops.partition(",")

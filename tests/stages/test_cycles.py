@@ -46,6 +46,13 @@ def test_the_model_holds_issue_behind_vsqrt():
     assert cycles.mca_cycles(["\tvsqrt.f32\ts0, s1", *adds]) >= cycles.mca_cycles(adds) + 12
 
 
+def test_a_traced_call_costs_what_a_branch_costs():
+    # the path holds the callee's instructions: a BL is the taken branch it is, not llvm-mca's
+    # 100-cycle untraced call
+    body = ["\tmovs\tr1, #0", "\tstr\tr1, [r0]", "\tbx\tlr"]
+    assert cycles.mca_cycles(["\tbl\t.Lt", *body]) == cycles.mca_cycles(["\tb\t.Lt", *body]) < 20
+
+
 def test_objdump_forms_the_model_lacks_are_substituted():
     # IT blocks, vcmpe, compare with zero, VFP immediates, writeback with .w
     block = ["\tvcmpe.f32\ts13, s15", "\tvcmp.f32\ts11, #0", "\tvmrs\tAPSR_nzcv, fpscr", "\tit\thi",
