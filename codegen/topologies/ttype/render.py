@@ -41,7 +41,8 @@ def three_level_context(model: Model, t: ThreeLevelTables, target: str) -> dict:
     return step_context(model, target, (INPUT, OUTPUT), FAULT_BITS, **{
         **table_fields(t), "topology_macro": "MPC_TOPOLOGY_THREE_LEVEL", "guard": GUARD, "dq": DQ,
         "first_virtual": FIRST_VIRTUAL, "seq": seq, "seq_pat": seq_pat, "groups": groups, "group_n": t.group_n,
-        "max_members": mm, "rows": rows, "row_n": t.row_n, "max_groups": mg, "n_segments": N_SEGMENTS,
+        "max_members": mm, "rows": rows, "row_n": t.row_n, "max_groups": mg, "min_groups": min(t.row_n),
+        "n_segments": N_SEGMENTS,
         "n_max_eval": N_MAX_EVAL, "safe_state": SAFE_STATE,
         "sincos_bound": sincos_bound(float(t.nf.decode("rad", t.const("ANGLE_GUARD_RAD")))
                                      + 2.0 * float(t.nf.decode("rad/s", t.const("OMEGA_GUARD_RAD_S")))
