@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from codegen.kernels.guard import Check
-from codegen.numfmt.float32 import FLOAT32
+from codegen.numfmt.float32 import FLOAT32, Float32
 from codegen.stages.verify import mismatch_mask
 from codegen.topologies.ttype.records import GUARD as TTYPE_GUARD
 from codegen.topologies.twolevel.records import GUARD as TWO_LEVEL_GUARD
@@ -53,8 +53,7 @@ def edge_states(base: np.ndarray, check: Check, limit: np.float32) -> list[np.nd
     return rows
 
 
-@pytest.mark.parametrize("name", sorted(CASES))
-def test_bit_pattern_guard_gives_the_reference_faults(name: str) -> None:
+def _edge_run(name: str) -> tuple[np.ndarray, np.ndarray, str]:
     path, overrides, guard = CASES[name]
     m = model_for(path, **overrides)
     topo = topology_of(m)
@@ -63,12 +62,41 @@ def test_bit_pattern_guard_gives_the_reference_faults(name: str) -> None:
     rows = []
     for check in guard:
         if check.limit:
-            assert FLOAT32.guard_bits(t.const(check.limit)) is not None, check.limit  # the bit form is in use
             rows += edge_states(base, check, np.float32(t.const(check.limit)))
     x = np.concatenate(rows)
-    ref, c = topo.step_batch(t, x), topo.host_library(m, t).step_batch(x)
+    source = topo.render(m, t, "host")[f"{m.prefix}_mpc.c"]
+    return topo.step_batch(t, x), topo.host_library(m, t).step_batch(x), source
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_bit_pattern_guard_gives_the_reference_faults(name: str) -> None:
+    guard = CASES[name][2]
+    ref, c, source = _edge_run(name)
+    for check in guard:
+        if check.limit:  # the bit form is in use for every limit
+            assert f"_{check.limit}_BITS" in source, check.limit
     assert np.array_equal(ref["fault"], c["fault"])
     assert len(np.unique(ref["fault"])) > 2  # both sides of every limit were reached
+    assert not mismatch_mask(ref, c)[0].any()
+
+
+#: a limit of each check kind taken out of the bit form: the guard's value-compare fallback
+WITHOUT_BITS = {"two-level": ("UDC_MIN_V", "UDC_MAX_V", "I_TRIP_A"), "t-type": ("UC_MIN_V", "TS3_S", "ANGLE_GUARD_RAD")}
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_limits_without_bit_patterns_fall_back_to_value_compares(name: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    # a limit whose float32 pattern the guard cannot use (a config could round one to zero) is
+    # compared as a value, in the fast path and the exact checks alike
+    real = Float32.guard_bits
+    m = model_for(CASES[name][0], **CASES[name][1])
+    t = topology_of(m).derive(m)
+    dropped = {repr(t.const(n)) for n in WITHOUT_BITS[name]}
+    monkeypatch.setattr(Float32, "guard_bits", lambda self, x: None if repr(x) in dropped else real(self, x))
+    ref, c, source = _edge_run(name)
+    for limit in WITHOUT_BITS[name]:
+        assert f"_{limit}_BITS" not in source, limit
+    assert np.array_equal(ref["fault"], c["fault"])
     assert not mismatch_mask(ref, c)[0].any()
 
 
