@@ -551,11 +551,25 @@ def _check_scenario_set(ck: _Checker) -> None:
                 f"'{v['inverter.topology']}' runs this config's scenario: use scenario.set = 'config'")
 
 
+def _check_two_level_controller(ck: _Checker) -> None:
+    """``controller.psi_ref`` and ``controller.cost`` choose the two-level MPTC's flux reference and
+    cost; the T-type MPDTC has its own (MTPA flux reference, cost eq. (7)): a t-type config that sets
+    them is refused rather than silently ignored."""
+    v = ck.values
+    if v["inverter.topology"] == "t-type":
+        for path in ("controller.psi_ref", "controller.cost"):
+            own = _default(path)
+            if v[path] != own:
+                ck.fail(path, v[path], f"two-level MPTC only; the t-type MPDTC takes its flux reference from "
+                                       f"MTPA and its cost from eq. (7): leave {path} = '{own}'")
+
+
 _CONSISTENCY: tuple[Callable[[_Checker], None], ...] = (
     _check_topology,
     _check_scenario_set,
     _check_tables_file,
     _check_surface_pmsm,
+    _check_two_level_controller,
 )
 
 

@@ -142,7 +142,10 @@ def _check_log(args: argparse.Namespace, model: Any) -> int:
           f"frames discarded (host->board {data['discarded_frames_out']}, board->host {data['discarded_frames_in']}), "
           f"malformed batches {data['bad_batches']}, malformed results {data['bad_results']}")
     base._write_json(args.json, data)
-    return base.EXIT_OK if data["mismatches"] == 0 and data["results"] > 0 else base.EXIT_FAIL
+    # a malformed batch or result is a protocol fault: it fails the check (frames that do not decode
+    # are counted only: the live run retried them)
+    ok = data["mismatches"] == 0 and data["results"] > 0 and data["bad_batches"] == 0 and data["bad_results"] == 0
+    return base.EXIT_OK if ok else base.EXIT_FAIL
 
 
 def _loop_mode(args: argparse.Namespace, session: Any, model: Any, tables: Any, log: Any) -> int:

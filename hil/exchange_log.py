@@ -114,7 +114,8 @@ def check_log(model: Model, tables: Any, path: Path) -> dict[str, Any]:
                 body = item.payload[k:]
                 count = schema.batch_head.unpack(item.payload[:k])["count"][0] if len(item.payload) >= k else -1
                 if len(body) % in_w or len(body) // in_w != count:
-                    faults["bad_batches"] += 1
+                    faults["bad_batches"] += 1  # its states are not taken: no result is paired with them
+                    continue
                 for i in range(len(body) // in_w):
                     state_of[(item.seq + i) & 0xFFFF] = body[i * in_w:(i + 1) * in_w]
             elif direction == "in" and item.type == Msg.RESULT and len(item.payload) != out_w:

@@ -87,6 +87,24 @@ def compile_m7(src: Path, obj: Path) -> None:
     assert ".itcm_text" in sections and ".dtcm_rodata" in sections
 
 
+def check_target_c(out: Path, work: Path, target: str, *, int16_model: bool = False) -> None:
+    """The step generated into ``out`` for ``target``, compiled as that target asks: gcc under the
+    strict warnings (every target), arm-none-eabi-gcc (stm32h743), the C28x text rules for the .c and
+    .h (tms320f28377) and, with ``int16_model``, clang's MSP430 target, whose int is 16 bits like the
+    C28x's."""
+    src = next(out.glob("*_mpc.c"))
+    compile_strict(src, work / f"{target}.o")
+    if target == "stm32h743":
+        compile_m7(src, work / "m7.o")
+    if target == "tms320f28377":
+        for f in (src, next(out.glob("*_mpc.h"))):
+            assert_c28x_clean(f.name, f.read_text())
+        if int16_model:
+            r = subprocess.run([require_tool("clang", "clang"), "--target=msp430", "-ffreestanding", "-fsyntax-only",
+                                *STRICT_WARN, f"-I{out}", str(src)], capture_output=True, text=True)
+            assert r.returncode == 0, r.stderr
+
+
 def assert_c28x_clean(name: str, text: str) -> None:
     """The C code of ``text`` (comments removed) uses no spelling the C28x profile forbids."""
     code = re.sub(r"/\*.*?\*/", "", text, flags=re.S)

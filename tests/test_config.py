@@ -18,6 +18,7 @@ from codegen.errors import ConfigError, MpcgenError
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 SPMSM = EXAMPLES / "seed001_spmsm.toml"
 IPMSM = EXAMPLES / "seed001_ipmsm.toml"
+TLEVEL = EXAMPLES / "seed000_tlevel.toml"
 DELETE = object()  # edit value meaning "remove this field or section"
 
 
@@ -310,6 +311,10 @@ INVALID = [
      "clamp minimum above Ts/3: must be in [0, Ts/3 = 1.66667e-05] (controller.dt_s = 5e-05)"),
     ("unknown-number-format", SPMSM, {"controller.number_format": "fixed-q15"}, "controller.number_format",
      "'fixed-q15'", "must be one of float32, fixed"),
+    ("psi-ref-on-t-type", TLEVEL, {"controller.psi_ref": "mtpa"}, "controller.psi_ref", "'mtpa'",
+     "two-level MPTC only"),
+    ("cost-on-t-type", TLEVEL, {"controller.cost": "reference"}, "controller.cost", "'reference'",
+     "leave controller.cost = 'rated'"),
     ("fixed-q-too-small", SPMSM, {"controller.fixed_q": 4}, "controller.fixed_q", "4", "must be an integer in [8, 30]"),
     ("prefix-uppercase", SPMSM, {"meta.prefix": "Spmsm"}, "meta.prefix", "'Spmsm'", "^[a-z][a-z0-9_]{0,23}$"),
     ("prefix-digit-first", SPMSM, {"meta.prefix": "1spmsm"}, "meta.prefix", "'1spmsm'", "C identifier"),

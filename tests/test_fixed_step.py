@@ -23,9 +23,7 @@ from conftest import (
     TTYPE,
     TTYPE_STRATEGIES,
     TWO_LEVEL,
-    assert_c28x_clean,
-    compile_m7,
-    compile_strict,
+    check_target_c,
     require_tool,
 )
 
@@ -59,16 +57,8 @@ def test_fixed_c_is_strict_clean_on_every_compiler_and_the_16_bit_int_model(tmp_
         src = next(out.glob("*_mpc.c"))
         code = re.sub(r"/\*.*?\*/", "", src.read_text(), flags=re.S)
         assert "float" not in code and "sqrtf" not in code  # no floating point in the fixed step
-        compile_strict(src, tmp_path / f"{target}.o")
-        if target == "stm32h743":
-            compile_m7(src, tmp_path / "m7.o")
-        if target == "tms320f28377":
-            for f in (src, next(out.glob("*_mpc.h"))):
-                assert_c28x_clean(f.name, f.read_text())
-            # the C28x type model: 16-bit int (clang's MSP430 target: sizeof(int) == 2)
-            r = subprocess.run([clang, "--target=msp430", "-ffreestanding", "-fsyntax-only", *STRICT_WARN,
-                                f"-I{out}", str(src)], capture_output=True, text=True)
-            assert r.returncode == 0, r.stderr
+        check_target_c(out, tmp_path, target, int16_model=True)
+    # the C28x type model: 16-bit int (clang's MSP430 target: sizeof(int) == 2)
     probe = subprocess.run([clang, "--target=msp430", "-ffreestanding", "-dM", "-E", "-x", "c", "/dev/null"],
                            capture_output=True, text=True).stdout
     assert "#define __SIZEOF_INT__ 2" in probe

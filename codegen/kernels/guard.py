@@ -20,8 +20,12 @@ from codegen.kernels.consts import Constants
 from codegen.kernels.frames import third_phase
 from codegen.numfmt import Ops
 
-__all__ = ["COMMON_FAULTS", "COMMON_FAULT_DOCS", "PhaseCurrents", "AllAtLeast", "AllAtMost", "AbsAtMost",
+__all__ = ["GUARD_FP", "COMMON_FAULTS", "COMMON_FAULT_DOCS", "PhaseCurrents", "AllAtLeast", "AllAtMost", "AbsAtMost",
            "IndexAtMost", "RealInRangeWhen", "Check", "fault_bits", "motor_checks", "evaluate", "gates_off"]
+
+#: essential operations of the common checks, for the cycle bound (``Topology.essential_ops``):
+#: |i_a|, |i_b|, |i_c| (i_c = -i_a - i_b), theta, omega, the DC-link limits, their compares
+GUARD_FP = 11
 
 #: fault bits every topology's guard has, in bit order
 COMMON_FAULTS: tuple[str, ...] = ("CURRENT", "UDC_LOW", "UDC_HIGH", "ANGLE", "SPEED", "TORQUE_REF", "STATE")

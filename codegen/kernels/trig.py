@@ -27,6 +27,9 @@ import numpy as np
 from codegen.numfmt import Ops
 from codegen.numfmt.float32 import FLOAT32, f32
 
+#: essential operations of one generated sin/cos, for the cycle bound (``Topology.essential_ops``):
+#: range reduction (8), odd polynomial (7), even polynomial (8), quadrant select (4); its 9 constants
+SINCOS_FP, SINCOS_LOADS = 27, 9
 #: Largest |theta_e| the step accepts (rad); beyond it the input guard trips.
 ANGLE_GUARD_RAD = FLOAT32.angle_guard_rad
 _PIO2_HI_BITS = 15  # n <= 2^(24-15) = 512 > 256 * 2/pi + 1

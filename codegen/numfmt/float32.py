@@ -137,9 +137,12 @@ class Float32Ops:
 
     def round_away(self, a: Any) -> np.ndarray:
         """The nearest integral value, halfway cases away from zero, with the sign of ``a`` (C99's
-        ``roundf``, exact: |a| + 0.5 is exact in float64 for every float32)."""
-        a64 = np.asarray(a, np.float64)
-        return np.copysign(np.floor(np.abs(a64) + 0.5), a64).astype(self.real)
+        ``roundf``).  Exact in the format itself: |a| - floor(|a|) is exact in binary floating point,
+        so no sum is rounded (|a| + 0.5 would round for the largest float64 below 0.5)."""
+        a = np.asarray(a, self.real)
+        m = np.abs(a)
+        f = np.floor(m)
+        return np.copysign(f + (m - f >= 0.5), a).astype(self.real)
 
     def rank_lt(self, a: Any, b: Any) -> np.ndarray:
         """Cost ranking: ``a`` before ``b`` by their bit patterns as unsigned integers (the C's

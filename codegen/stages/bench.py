@@ -52,9 +52,9 @@ def emulated_instructions(model: Model, strategies: list[str], log: Callable[[st
     number format a config can choose (``codegen.model.NUMBER_FORMATS``): strategy -> format name -> figures, or None
     where the config does not fit another format (its error message under ``"error"``).
 
-    Each image replays the same 2 000 states of the baseline's recorded
-    trajectory (two-level: the conventional closed-loop run; three-level: the
-    27-MPDTC run at rated speed) and also runs the bit-exact self-test; a
+    Each image, in every number format, replays the same ``N_BENCH`` states of the float32
+    baseline's recorded trajectory (``fwdata.trajectory_states``; two-level: the conventional
+    closed-loop run; three-level: the 27-MPDTC run at rated speed) and also runs the bit-exact self-test; a
     mismatch or a digest disagreement is an error, never a number.  In the config's own number
     format, each strategy also gets its estimated Cortex-M7 cycles and their lower bound
     (``codegen.stages.cycles.strategy_cycles``, under ``"cycles"``; ``cycle_states`` bench states traced).
@@ -84,7 +84,7 @@ def emulated_instructions(model: Model, strategies: list[str], log: Callable[[st
                     raise EmulationError(f"{s} ({fmt}): emulated results differ from the reference "
                                          f"({r.mismatches} mismatches)")
                 out[s][fmt] = {"min": r.instr_min, "median": r.instr_median, "max": r.instr_max,
-                               "mean": r.instr_mean, "selftest_states": r.states, "mismatches": r.mismatches}
+                               "mean": r.instr_mean, "states_checked": r.states}
                 if fmt == own:
                     log(f"  {s} ({fmt}): tracing the step in unicorn, cycles from llvm-mca (Cortex-M7)")
                     out[s][fmt]["cycles"] = strategy_cycles(variant, tables, Path(tmp) / f"{s}-{fmt}" / "build" /

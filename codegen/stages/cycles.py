@@ -62,7 +62,8 @@ METHOD_NOTE = ("estimated M7 cycles: the step's executed instruction path (the r
                "instruction by instruction in unicorn over the bench states) fed to llvm-mca's Cortex-M7 "
                "pipeline model (-mcpu=cortex-m7, one iteration, Total Cycles); not modelled: branch penalties, "
                "caches, flash wait states, interrupts (TCM placement makes every memory access single-cycle). "
-               "bound: the essential FP operations, square roots and loads per step at the core's issue limits.")
+               "bound: the essential FP operations, square roots, divisions, loads and stores per step at the core's "
+               "issue limits.")
 
 #: instructions LLVM 14's Cortex-M7 model has no scheduling data for -> an equivalent with the same timing
 _SUBSTITUTES = {"vcmpe.f32": "vcmp.f32", "vcmpe.f64": "vcmp.f64", "vcmp.f32": "vcmp.f32", "vcmp.f64": "vcmp.f64"}
@@ -311,7 +312,7 @@ def _path_lines(blocks: list[tuple[int, int]], addresses: np.ndarray, asm: dict[
     return lines
 
 
-def estimate_cycles(elf_path: Path, symbol: str, states: np.ndarray, expected: np.ndarray | None = None, *,
+def estimate_cycles(elf_path: Path, symbol: str, states: np.ndarray, expected: np.ndarray, *,
                     max_states: int = 256, jobs: int = 4) -> CycleEstimate:
     """Estimated Cortex-M7 cycles of ``symbol(&in, &out)`` for each of at most ``max_states`` of
     ``states`` (input records in the step's format, evenly spaced), with ``expected`` the reference's
@@ -320,14 +321,14 @@ def estimate_cycles(elf_path: Path, symbol: str, states: np.ndarray, expected: n
     tracer = StepTracer(elf_path, symbol)
     asm = disassemble(elf_path)
     addresses = np.array(sorted(asm), dtype=np.int64)
-    out_size = expected.dtype.itemsize if expected is not None else 256
+    out_size = expected.dtype.itemsize
     keys: list[str] = []
     paths: dict[str, list[str]] = {}
     n_instr = []
     mismatches = 0
     for i in idx:
         blocks, out = tracer.run(np.ascontiguousarray(states[i:i + 1]).tobytes(), out_size)
-        if expected is not None and out != np.ascontiguousarray(expected[i:i + 1]).tobytes():
+        if out != np.ascontiguousarray(expected[i:i + 1]).tobytes():
             mismatches += 1
         key = hashlib.sha1(repr(blocks).encode()).hexdigest()
         if key not in paths:

@@ -58,7 +58,9 @@ def evenly_spaced(x: np.ndarray, n: int) -> np.ndarray:
 
 
 def trajectory_states(model: Model, n: int) -> np.ndarray:
-    """``n`` states evenly spaced over the topology's recorded benchmark trajectory.
+    """``n`` states evenly spaced over the topology's recorded benchmark trajectory, float32 SI
+    values: the float32 controller's run, whatever the model's number format, so that every format's
+    image replays the same states (``in_step_format`` converts them).
 
     The host build is taken under a file lock: parallel test workers share
     the build cache.
@@ -67,7 +69,7 @@ def trajectory_states(model: Model, n: int) -> np.ndarray:
     cache_root().mkdir(parents=True, exist_ok=True)
     with open(cache_root() / f"{model.prefix}.trajectory.lock", "w") as lock:
         fcntl.flock(lock, fcntl.LOCK_EX)
-        traj = topo.trajectory(model)
+        traj = topo.trajectory(model.with_controller(number_format="float32"))
     return evenly_spaced(traj.states, n)
 
 

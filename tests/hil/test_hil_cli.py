@@ -72,9 +72,17 @@ def test_log_is_re_verified_offline(tmp_path, capsys):
     data = json.loads(js.read_text())
     assert data["results"] >= 300 and data["distinct_states"] == 300 and data["mismatches"] == 0
     assert data["discarded_frames_in"] == data["bad_results"] == data["bad_batches"] == 0
-    # a fabricated answer: a valid frame whose outputs are all zero
     m = load_config(SPMSM, {"controller.tables": "published", "controller.strategy": "s1"})
     schema = Schema.of(m)
+    # a RESULT one octet short alone fails the check (a protocol fault, not a result)
+    clean = log.read_text()
+    with open(log, "a") as fh:
+        short = encode_frame(Msg.RESULT, 60002, bytes(schema.result_octets - 1))
+        fh.write(json.dumps({"t": 98.0, "dir": "in", "hex": short.hex()}) + "\n")
+    assert main(["hil", str(SPMSM), *cfg, "--check-log", str(log), "--json", str(js), "-q"]) == 1
+    assert json.loads(js.read_text())["bad_results"] == 1
+    log.write_text(clean)
+    # a fabricated answer: a valid frame whose outputs are all zero
     x = topology_of(m).random_states(m, topology_of(m).derive(m), 1, 3)
     bad = encode_frame(Msg.RESULT, 60000, bytes(schema.result_octets))
     with open(log, "a") as fh:

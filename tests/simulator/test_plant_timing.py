@@ -44,8 +44,7 @@ def test_every_delay_and_compensation_runs(tmp_path, config, strategy, short, d,
     data = _simulate(tmp_path, str(config), "--strategies", strategy, comp,
                      "--set", f"plant.actuation_delay_periods={d}", *short)
     assert list(data["strategies"]) == [strategy]
-    text = json.dumps(data["strategies"][strategy])
-    assert "f_ave_hz" in text and "T_rip_RMSE_nm" in text
+    _assert_metrics(data["strategies"][strategy])
 
 
 @pytest.mark.parametrize("config", [SPMSM, TLEVEL], ids=["seed001_spmsm", "seed000_tlevel"])
@@ -53,6 +52,28 @@ def test_the_issue_command_runs(tmp_path, config):
     """``simulate CONFIG --set plant.actuation_delay_periods=1 --no-delay-compensation``."""
     data = _simulate(tmp_path, str(config), "--set", "plant.actuation_delay_periods=1", "--no-delay-compensation")
     assert data["strategies"]
+    for result in data["strategies"].values():
+        _assert_metrics(result)
+
+
+def _values(d: object, key: str) -> list[object]:
+    """Every value stored under ``key`` anywhere in a simulate result (the topologies nest differently)."""
+    if isinstance(d, dict):
+        return [v for k, v in d.items() if k == key] + [x for v in d.values() for x in _values(v, key)]
+    if isinstance(d, list):
+        return [x for v in d for x in _values(v, key)]
+    return []
+
+
+def _assert_metrics(result: dict) -> None:
+    """The run has a finite torque ripple and a positive switching frequency."""
+    def numbers(key: str) -> list[float]:  # the metric values (a window's description shares the key)
+        return [v for v in _values(result, key) if isinstance(v, (int, float))]
+
+    ripple, f_ave = numbers("T_rip_RMSE_nm"), numbers("f_ave_hz")
+    assert ripple and f_ave
+    assert all(math.isfinite(r) and r > 0 for r in ripple), ripple
+    assert all(math.isfinite(f) and f > 0 for f in f_ave), f_ave
 
 
 def _forward_euler_bound(model, tr) -> tuple[float, float]:

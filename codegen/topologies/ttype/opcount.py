@@ -1,5 +1,5 @@
 """Essential operations of the three-level MPDTC step, counted from its algorithm (``reference.py``),
-for the cycle lower bound of ``mpcgen bench --emulated`` (``codegen.stages.cycles_bound``).
+for the cycle lower bound of ``mpcgen bench --emulated`` (``codegen.stages.cycles.cycle_bound``).
 
 Counts, not measurements: the FP operations, square roots, divisions, loads
 and stores the algorithm cannot do without, per step, per evaluated voltage
@@ -11,8 +11,8 @@ from __future__ import annotations
 
 from typing import Any
 
-SINCOS_FP, SINCOS_LOADS = 27, 9
-GUARD_FP = 11
+from codegen.kernels.guard import GUARD_FP
+from codegen.kernels.trig import SINCOS_FP, SINCOS_LOADS
 
 
 def essential_ops(tables: Any) -> dict[str, dict[str, int]]:

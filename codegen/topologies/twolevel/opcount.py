@@ -1,5 +1,5 @@
 """Essential operations of the two-level step, counted from its algorithm (``reference.py``), for the
-cycle lower bound of ``mpcgen bench --emulated`` (``codegen.stages.cycles_bound``).
+cycle lower bound of ``mpcgen bench --emulated`` (``codegen.stages.cycles.cycle_bound``).
 
 Counts, not measurements: the FP operations (add, sub, mul, abs, compare,
 convert, select), square roots, divisions, loads (inputs, constants, table
@@ -13,10 +13,8 @@ from __future__ import annotations
 
 from typing import Any
 
-#: sin/cos: range reduction (8), odd polynomial (7), even polynomial (8), quadrant select (4)
-SINCOS_FP, SINCOS_LOADS = 27, 9
-#: input guard: |ia|, |ib|, |ic| (ic = -ia - ib), theta, omega, udc low/high, their compares
-GUARD_FP = 11
+from codegen.kernels.guard import GUARD_FP
+from codegen.kernels.trig import SINCOS_FP, SINCOS_LOADS
 
 
 def essential_ops(tables: Any) -> dict[str, dict[str, int]]:

@@ -63,10 +63,10 @@ def test_thd_with_the_nominal_fundamental() -> None:
 
 def test_nominal_and_measured_fundamentals_differ_when_the_speed_is_off() -> None:
     # the current runs at 51 Hz (speed 2 % above its 50 Hz reference): analysed at the nominal 50 Hz
-    # the fundamental leaks into the neighbouring bins and the THD rises above the waveform's 5 %
+    # the harmonic bins miss the 51 Hz harmonics and the THD reads about 1.9 %, not the waveform's 5 %
     dt, n = 50e-6, 8000
     ia = _ia(51.0, dt, n, 0.05)
     at_measured, _ = thd(ia, dt, 0.0, 0.4, 51.0)
     at_nominal, _ = thd(ia, dt, 0.0, 0.4, 50.0)
     assert at_measured == pytest.approx(5.0, rel=1e-2)
-    assert at_nominal != pytest.approx(at_measured, rel=1e-2)
+    assert at_nominal < 0.5 * at_measured

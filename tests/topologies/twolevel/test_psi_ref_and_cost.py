@@ -8,7 +8,6 @@ at T* = 0 and across sign changes, and the closed loop settles on the MTPA flux.
 from __future__ import annotations
 
 import math
-import subprocess
 from pathlib import Path
 
 import numpy as np
@@ -25,7 +24,7 @@ from codegen.topologies.twolevel.derive import T_FLOOR_OF_RATED, cost_bounds, de
 from codegen.topologies.twolevel.reference import flux_reference, flux_weight, step_batch
 from codegen.topology import topology_of
 
-from conftest import STRICT_WARN, assert_c28x_clean, compile_m7, compile_strict, require_tool
+from conftest import check_target_c
 
 EXAMPLES = Path(__file__).resolve().parents[3] / "examples"
 VARIANTS = [("mtpa", "rated"), ("constant", "reference"), ("mtpa", "reference")]
@@ -63,20 +62,9 @@ def test_generated_c_is_strict_clean_on_every_target(tmp_path: Path, number_form
         assert main(["generate", cfg, "--number-format", number_format, "--strategy", "s3", "--tables", "published",
                      "--target", target, "--set", "controller.psi_ref=mtpa", "--set", "controller.cost=reference",
                      "-o", str(out), "-q"]) == 0
-        src = next(out.glob("*_mpc.c"))
-        text = src.read_text()
+        text = next(out.glob("*_mpc.c")).read_text()
         assert "ipmsm_psi_tab[128]" in text and "ipmsm_psi_slope[128]" in text
-        compile_strict(src, tmp_path / f"{target}.o")
-        if target == "stm32h743":
-            compile_m7(src, tmp_path / "m7.o")
-        if target == "tms320f28377":
-            for f in (src, next(out.glob("*_mpc.h"))):
-                assert_c28x_clean(f.name, f.read_text())
-            if number_format == "fixed":
-                clang = require_tool("clang", "clang")
-                r = subprocess.run([clang, "--target=msp430", "-ffreestanding", "-fsyntax-only", *STRICT_WARN,
-                                    f"-I{out}", str(src)], capture_output=True, text=True)
-                assert r.returncode == 0, r.stderr
+        check_target_c(out, tmp_path, target, int16_model=number_format == "fixed")
 
 
 # ---- MTPA flux reference against an independent float64 computation ---------------------------

@@ -295,7 +295,7 @@ static int period_finish(const ttype_sim_params_t *p, ttype_sim_state_t *state,
                       (float)MPC_DECODE_psi_est_wb(out->psi_est_wb));
     if (tr->vo_v != NULL) tr->vo_v[j] = x->vo_v;
     if (tr->vo_meas_v != NULL) tr->vo_meas_v[j] = sampled_vo(p, state, x);
-    if (tr->t_n_s != NULL) tr->t_n_s[j] = (float)MPC_DECODE_t_n_s(out->t_n_s);
+    if (tr->t_n_s != NULL) tr->t_n_s[j] = (double)MPC_DECODE_t_n_s(out->t_n_s);
     if (tr->psi_ref_wb != NULL) tr->psi_ref_wb[j] = (float)MPC_DECODE_psi_ref_wb(out->psi_ref_wb);
     if (tr->vo_est_v != NULL) tr->vo_est_v[j] = (float)MPC_DECODE_vo_v(out->vo_v);
     if (tr->applied_vector != NULL) tr->applied_vector[j] = (uint16_t)cur.vector;
