@@ -6,7 +6,7 @@ from typing import Any
 import numpy as np
 
 from codegen.model import Model
-from codegen.stages.fwdata import trajectory_states
+from codegen.stages.fwdata import in_step_format, trajectory_states
 from codegen.topology import topology_of
 
 __all__ = ["SOURCES", "replay_states"]
@@ -26,7 +26,7 @@ def replay_states(model: Model, tables: Any, n: int, seed: int = 1,
     for src in sorted(sources, key=lambda s: s == "random"):  # random last: it takes what is left
         n = share[src] + (0 if src != "random" else sum(share[s] - len(out[s]) for s in out))
         if src == "closed_loop":
-            out[src] = trajectory_states(model, n)
+            out[src] = in_step_format(model, tables, trajectory_states(model, n))
         elif src == "random":
             out[src] = topo.random_states(model, tables, n, seed)
         elif src == "adversarial":

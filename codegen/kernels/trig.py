@@ -102,11 +102,11 @@ def coeffs_of(k: Any) -> SinCosCoeffs:
                         (k.COS_C2, k.COS_C4, k.COS_C6, k.COS_C8))
 
 
-def sincos(ops: Ops, x: Any, consts: Any = None) -> tuple[Any, Any]:
+def sincos(ops: Ops, x: Any, consts: Any) -> tuple[Any, Any]:
     """sin and cos of ``x`` through the format's ``ops``: the exact operation sequence of the C
     (``templates/common/kernels.j2`` ``sincos_fn``).  ``consts``: the step's constants
-    (``Constants``; their sin/cos coefficients in the format), or None for the float32 coefficients."""
-    return _sincos(ops, x, sincos_coeffs() if consts is None else coeffs_of(consts))
+    (``Constants``; their sin/cos coefficients in the format)."""
+    return _sincos(ops, x, coeffs_of(consts))
 
 
 def _sincos(ops: Ops, x: Any, k: SinCosCoeffs) -> tuple[Any, Any]:

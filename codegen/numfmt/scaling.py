@@ -34,7 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .units import BASE_UNITS, parse_unit
+from .units import parse_unit
 
 __all__ = ["Signal", "BaseRanges", "Scaling", "RepresentationError", "MIN_CONST_BITS", "MIN_FRAC_BITS", "choose_scaling"]
 
@@ -201,4 +201,3 @@ def choose_scaling(signals: Iterable[Signal], base: BaseRanges, global_q: int | 
     return sc
 
 
-__all__ += ["BASE_UNITS"]

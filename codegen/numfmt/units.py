@@ -17,10 +17,8 @@ from __future__ import annotations
 import re
 from functools import cache
 
-__all__ = ["BASE_UNITS", "Dim", "parse_unit"]
+__all__ = ["Dim", "parse_unit"]
 
-#: the base units of the scaled format, in exponent order
-BASE_UNITS: tuple[str, ...] = ("V", "A", "s")
 
 #: exponents (V, A, s) of every named unit
 Dim = tuple[int, int, int]

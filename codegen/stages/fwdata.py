@@ -16,7 +16,7 @@ import numpy as np
 
 from codegen.hostbuild import cache_root
 from codegen.model import Model
-from codegen.numfmt import number_format
+from codegen.numfmt import FLOAT_CONTROLLER, number_format
 from codegen.records import REAL, RecordLayout
 from codegen.teststates import in_format
 from codegen.topology import Topology, topology_of
@@ -69,7 +69,7 @@ def trajectory_states(model: Model, n: int) -> np.ndarray:
     cache_root().mkdir(parents=True, exist_ok=True)
     with open(cache_root() / f"{model.prefix}.trajectory.lock", "w") as lock:
         fcntl.flock(lock, fcntl.LOCK_EX)
-        traj = topo.trajectory(model.with_controller(number_format="float32"))
+        traj = topo.trajectory(model.with_controller(number_format=FLOAT_CONTROLLER))
     return evenly_spaced(traj.states, n)
 
 

@@ -91,7 +91,7 @@ def _signal_rows(layout: RecordLayout, observed: np.ndarray, ok: np.ndarray) -> 
         seen = np.abs(layout.decode(f.name, observed[f.name][ok])) if ok.any() else np.zeros(1)
         rows.append({"record": layout.record.name, "field": f.name, "unit": f.unit, "q": sc.describe(f.unit),
                      "largest": sc.largest(f.unit), "resolution": sc.resolution(f.unit),
-                     "observed_max_abs": float(seen.max()) if seen.size else 0.0})
+                     "observed_max_abs": float(seen.max())})
     return rows
 
 

@@ -151,12 +151,13 @@ def plots(model: Model, data: dict, traces: Path | None, outdir: Path) -> dict[s
             files.append(name)
         fig, axes = new_figure(len(ERROR_FIELDS), height=2.6 * len(ERROR_FIELDS))
         for ax, field in zip(axes, ERROR_FIELDS):
+            unit = next((e[field]["unit"] for e in d["errors"].values()), "")
             for key, e in d["errors"].items():
                 h = e[field][QUANTISED].get("hist")
                 if h:
                     edges = np.asarray(h["edges"])
                     ax.stairs(h["counts"], edges, label=key)
-            ax.set(xlabel=f"fixed - float64 ideal, {field} / {e[field]['unit'] or '1'}", ylabel="states",
+            ax.set(xlabel=f"fixed - float64 ideal, {field} / {unit or '1'}", ylabel="states",
                    title=f"{model.name} {s}: error of {field}")
             ax.grid(True, alpha=0.3)
             ax.legend(loc="best")

@@ -58,7 +58,7 @@ def assemble(plan: Any, model: Model, outs: list[dict[str, Any]], timing: dict[s
     })
 
 
-def _metric_sets(result: dict[str, Any]) -> list[tuple[str, str | None, dict[str, Any]]]:
+def metric_sets(result: dict[str, Any]) -> list[tuple[str, str | None, dict[str, Any]]]:
     """(strategy, scenario run or None, metrics) of one run's simulate result."""
     out: list[tuple[str, str | None, dict[str, Any]]] = []
     for s, m in result.get("strategies", {}).items():
@@ -81,7 +81,7 @@ def flat_rows(data: dict[str, Any]) -> list[dict[str, Any]]:
     for run in data["runs"]:
         head: dict[str, Any] = {"run": run["index"], "grid_point": run["grid_point"], "draw": run["draw"]}
         head.update(run["params"])
-        for s, scen, m in _metric_sets(run):
+        for s, scen, m in metric_sets(run):
             row = dict(head, strategy=s)
             if scen is not None:
                 row["scenario"] = scen

@@ -26,6 +26,7 @@ from typing import Any
 from codegen.errors import MpcgenError, UsageError
 from codegen.model import Model
 from codegen.results import clean_json
+from codegen.stages.sweep_output import metric_sets
 from codegen.topology import topology_of
 
 __all__ = ["Runner", "check_runner_args", "run_task", "run_plan", "TIMING_KEYS"]
@@ -117,15 +118,16 @@ def run_task(index: int, model: Model, strategies: list[str]) -> dict[str, Any]:
 
 
 def _summary(plan: Any, out: dict[str, Any]) -> str:
-    """A short line about a finished run: its parameters and the first strategy's torque ripple."""
+    """A short line about a finished run: its parameters and each strategy's (and scenario run's) torque
+    ripple."""
     run = plan.runs[out["index"]]
     params = ", ".join(f"{k.rpartition('.')[2]}={v:.6g}" if isinstance(v, float) else f"{k.rpartition('.')[2]}={v}"
                        for k, v in run["params"].items())
     rip = []
-    for s, m in out["result"].get("strategies", {}).items():
-        v = m.get("T_rip_RMSE_nm") if isinstance(m, dict) else None
+    for s, scenario, m in metric_sets(out["result"]):
+        v = m.get("T_rip_RMSE_nm")
         if isinstance(v, float):
-            rip.append(f"{s} {v:.4f}")
+            rip.append(f"{s}{'/' + scenario if scenario else ''} {v:.4f}")
     ripple = f"; T_rip {' '.join(rip)} N*m" if rip else ""
     return f"{params}{ripple}"
 

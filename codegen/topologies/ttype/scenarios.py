@@ -20,7 +20,6 @@ neutral-point ripple, u_ab THD, line-voltage jumps; JSON; plots.
 from __future__ import annotations
 
 import dataclasses
-import math
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -67,8 +66,9 @@ def steady_window(model: Model) -> tuple[float, float]:
 
 def prefix(trace, duration_s: float):
     """The first ``duration_s`` of a trace (every per-period array cut; the run is causal, so this is
-    the trace a run of that duration gives)."""
-    k = int(math.ceil(duration_s / trace.dt_s - 1e-6))
+    the trace a run of that duration gives: round(duration_s / dt_s) periods, as
+    ``codegen.simulator.driver.n_periods`` counts them)."""
+    k = int(round(duration_s / trace.dt_s))
     cut = {f.name: getattr(trace, f.name)[:k] for f in dataclasses.fields(trace)
            if isinstance(getattr(trace, f.name), np.ndarray)}
     return dataclasses.replace(trace, **cut)

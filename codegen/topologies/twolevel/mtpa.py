@@ -25,7 +25,7 @@ import numpy as np
 
 from codegen.model import Motor
 
-__all__ = ["MTPA_SEGMENTS", "mtpa_current", "mtpa_flux", "flux_table"]
+__all__ = ["MTPA_SEGMENTS", "mtpa_current", "mtpa_flux", "flux_table", "interpolation_error"]
 
 #: segments of the psi*(|T*|) table (nodes 0 .. MTPA_SEGMENTS - 1 plus slopes; 1 KB of float32)
 MTPA_SEGMENTS = 128

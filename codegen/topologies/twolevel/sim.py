@@ -49,7 +49,6 @@ from codegen.topologies.twolevel.records import INPUT
 
 PARAMS = SimStruct("twolevel_sim_params_t", "two-level simulator parameters", Record("twolevel_sim_params", fields("""
     substeps            i32   1  RK4 sub-steps per period (dt_s/substeps <= 1 us)
-    delay_compensation  i32   1  controller.delay_compensation (what the controller assumes; not read: the plant's timing is common.delay_periods)
 """)), base=SIM_PARAMS)
 
 STATE = SimStruct("twolevel_sim_state_t", "two-level carried state", Record("twolevel_sim_state", fields("""
@@ -97,7 +96,6 @@ def params_from_model(ffi: Any, model: Model, substeps: int | None = None) -> An
     c = model.controller
     p = fill_common_params(ffi.new(f"{PARAMS.ctype} *"), model)
     p.substeps = int(substeps) if substeps is not None else default_substeps(c.dt_s)
-    p.delay_compensation = 1 if c.delay_compensation else 0
     return p
 
 

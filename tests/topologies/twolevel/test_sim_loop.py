@@ -48,7 +48,7 @@ def test_params_from_model(stub, spmsm_model):
     p = params_from_model(ffi, spmsm_model)
     c = p.common
     assert (c.rs_ohm, c.ld_h, c.pole_pairs, c.udc_v, c.dt_s, p.substeps) == (0.2, 8.5e-3, 4, 312.0, 50e-6, 50)
-    assert (c.kp, c.ki, c.limit_nm, c.speed_imposed, p.delay_compensation) == (5.0, 10.0, 30.0, 0, 0)
+    assert (c.kp, c.ki, c.limit_nm, c.speed_imposed) == (5.0, 10.0, 30.0, 0)
 
 
 def test_full_scenario_follows_reference(full_run, spmsm_model):
