@@ -32,6 +32,7 @@ Everything is vectorised numpy; nothing loops over samples in Python.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -474,23 +475,34 @@ def _all_steady(trace: Any, model: Model, windows: list[tuple[float, float]]) ->
             "not_steady_reason": " | ".join(f"[{c.t0_s:g}, {c.t1_s:g}) s: {c.reason}" for c in bad)}
 
 
-def thd_ia(trace: Any, model: Model, tw: tuple[float, float] | None, f_max_hz: float,
-           where: str) -> tuple[float, dict[str, Any]]:
-    """THD of i_a over the THD window ``tw`` (NaN and the reason when there is none).
-
-    ``where`` starts the description (e.g. "i_a over").
-    """
+def _thd_ia_over(trace: Any, model: Model, tw: tuple[float, float] | None, f_max_hz: float,
+                 f1_hz: Callable[[float, float], float], describe: Callable[[dict[str, Any], float], str],
+                 fundamental: str) -> tuple[float, dict[str, Any]]:
+    """THD of i_a over the THD window ``tw`` with the fundamental ``f1_hz(t0, t1)`` (NaN and the reason
+    when there is no window or no THD), described by ``describe(info, f1)``."""
     if tw is None:
         return not_computed("no steady window with a nonzero speed reference")
     try:
-        value, info = thd(trace.ia_a, trace.dt_s, tw[0], tw[1], fundamental_hz(trace, model, *tw), f_max_hz)
+        f1 = f1_hz(*tw)
+        value, info = thd(trace.ia_a, trace.dt_s, tw[0], tw[1], f1, f_max_hz)
     except ValueError as exc:
         return not_computed(str(exc), window_s=list(tw))
-    info["description"] = (f"{where} [{tw[0]:g}, {tw[1]:g}) s, {info['n_periods']} fundamental periods, "
-                           f"harmonics {info['harmonics'][0]}..{info['harmonics'][1]}")
-    info["fundamental"] = "measured: mean electrical speed of the plant over the window"
+    info["description"] = describe(info, f1)
+    info["fundamental"] = fundamental
     info.update(check_steady(trace, model, *tw).as_json())
     return value, info
+
+
+def thd_ia(trace: Any, model: Model, tw: tuple[float, float] | None, f_max_hz: float,
+           where: str) -> tuple[float, dict[str, Any]]:
+    """THD of i_a over the THD window ``tw`` with the measured fundamental (:func:`fundamental_hz`);
+    NaN and the reason when there is none.  ``where`` starts the description (e.g. "i_a over")."""
+    w = tw or (0.0, 0.0)  # the description is made only for a window
+    return _thd_ia_over(
+        trace, model, tw, f_max_hz, lambda t0, t1: fundamental_hz(trace, model, t0, t1),
+        lambda info, f1: (f"{where} [{w[0]:g}, {w[1]:g}) s, {info['n_periods']} fundamental periods, "
+                          f"harmonics {info['harmonics'][0]}..{info['harmonics'][1]}"),
+        "measured: mean electrical speed of the plant over the window")
 
 
 def nominal_fundamental_hz(trace: Any, pole_pairs: int, t0: float, t1: float) -> float:
@@ -505,19 +517,12 @@ def thd_ia_nominal(trace: Any, model: Model, tw: tuple[float, float] | None,
     """THD of i_a over ``tw`` with the nominal fundamental (:func:`nominal_fundamental_hz`: from the
     speed reference, not the measured speed), harmonics 2 .. min(f_max_hz, fs/2)/f1; NaN and the
     reason when there is no window."""
-    if tw is None:
-        return not_computed("no steady window with a nonzero speed reference")
-    f1 = nominal_fundamental_hz(trace, model.motor.pole_pairs, *tw)
-    try:
-        value, info = thd(trace.ia_a, trace.dt_s, tw[0], tw[1], f1, f_max_hz)
-    except ValueError as exc:
-        return not_computed(str(exc), window_s=list(tw))
-    info["description"] = (f"i_a over [{info['t0_s']:g}, {info['t1_s']:g}) s, {info['n_periods']} periods of the "
-                           f"nominal fundamental {f1:.6g} Hz (p * |n*| / 60), harmonics "
-                           f"{info['harmonics'][0]}..{info['harmonics'][1]} (<= {info['f_max_hz']:.6g} Hz)")
-    info["fundamental"] = "nominal: pole pairs * speed reference"
-    info.update(check_steady(trace, model, *tw).as_json())
-    return value, info
+    return _thd_ia_over(
+        trace, model, tw, f_max_hz, lambda t0, t1: nominal_fundamental_hz(trace, model.motor.pole_pairs, t0, t1),
+        lambda info, f1: (f"i_a over [{info['t0_s']:g}, {info['t1_s']:g}) s, {info['n_periods']} periods of the "
+                          f"nominal fundamental {f1:.6g} Hz (p * |n*| / 60), harmonics "
+                          f"{info['harmonics'][0]}..{info['harmonics'][1]} (<= {info['f_max_hz']:.6g} Hz)"),
+        "nominal: pole pairs * speed reference")
 
 
 def steady_ripples(trace: Any, model: Model, windows: list[tuple[float, float]],

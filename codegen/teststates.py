@@ -109,16 +109,22 @@ def angle_reduction_borders(n: int, angle_guard: float, rng: np.random.Generator
     return th
 
 
-def in_format(x: np.ndarray, layout: RecordLayout) -> np.ndarray:
-    """States built as float32 SI values (the builders here) as input records of ``layout`` (the
-    input record in the step's number format): each real field converted once (fixed point: round
+def in_format(x: np.ndarray, layout: RecordLayout, source: RecordLayout | None = None) -> np.ndarray:
+    """States built as float32 SI values (the builders here), or records of ``source`` (another number
+    format's layout of the same record), as input records of ``layout`` (the input record in the
+    step's number format): each real field decoded to SI float64 and encoded once (fixed point: round
     half up, saturated, NaN -> 0, so the guard-limit and non-finite cases land on the format's
-    extremes), the other fields copied.  Records already in the format are returned as they are."""
-    if x.dtype == layout.dtype:
+    extremes), the other fields copied.  Float32 SI records already in the format are returned as
+    they are."""
+    if source is None and x.dtype == layout.dtype:
         return x
     out = layout.zeros(len(x))
     for f in layout.fields:
-        out[f.name] = layout.encode(f.name, x[f.name].astype(np.float64)) if f.kind == REAL else x[f.name]
+        if f.kind != REAL:
+            out[f.name] = x[f.name]
+            continue
+        si = source.decode(f.name, x[f.name]) if source is not None else x[f.name].astype(np.float64)
+        out[f.name] = layout.encode(f.name, si)
     return out
 
 

@@ -29,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from .lanes import LaneOps
 from .scaling import INT32_MAX, INT32_MIN, BaseRanges, Scaling, Signal, choose_scaling
 
 __all__ = ["FixedOps", "Fixed", "FIXED", "isqrt64"]
@@ -52,8 +53,10 @@ def isqrt64(x: Any) -> np.ndarray:
     return r
 
 
-class FixedOps:
+class FixedOps(LaneOps):
     """The reference's arithmetic in the fixed-point format: numpy int64, saturated to int32."""
+
+    real = np.int32
 
     def __init__(self, scaling: Scaling) -> None:
         self.g = scaling.frac_bits
@@ -64,12 +67,6 @@ class FixedOps:
     def const(self, x: float) -> np.int32:
         """A dimensionless literal (round half up)."""
         return np.int32(self.scaling.const(x, ""))
-
-    def array(self, values: Any) -> np.ndarray:
-        return np.asarray(values, dtype=np.int32)
-
-    def zeros(self, shape: Any) -> np.ndarray:
-        return np.zeros(shape, np.int32)
 
     def add(self, a: Any, b: Any) -> np.ndarray:
         return _sat(_i64(a) + _i64(b))
@@ -99,30 +96,6 @@ class FixedOps:
         a = _i64(a)
         return _sat(np.where(a > 0, isqrt64(np.maximum(a, 0) << self.g), 0))
 
-    def lt(self, a: Any, b: Any) -> np.ndarray:
-        return np.asarray(a < b)
-
-    def le(self, a: Any, b: Any) -> np.ndarray:
-        return np.asarray(a <= b)
-
-    def gt(self, a: Any, b: Any) -> np.ndarray:
-        return np.asarray(a > b)
-
-    def ge(self, a: Any, b: Any) -> np.ndarray:
-        return np.asarray(a >= b)
-
-    def eq(self, a: Any, b: Any) -> np.ndarray:
-        return np.asarray(a == b)
-
-    def ne(self, a: Any, b: Any) -> np.ndarray:
-        return np.asarray(a != b)
-
-    def where(self, cond: Any, a: Any, b: Any) -> np.ndarray:
-        return np.where(cond, a, b).astype(np.int32)
-
-    def select(self, conds: list[Any], choices: list[Any], default: Any) -> np.ndarray:
-        return np.select(conds, choices, default).astype(np.int32)
-
     def trunc_int(self, a: Any) -> np.ndarray:
         a = _i64(a)
         m = np.abs(a) >> self.g
@@ -133,7 +106,7 @@ class FixedOps:
 
     def rank_lt(self, a: Any, b: Any) -> np.ndarray:
         """Cost ranking: the counts' order."""
-        return np.asarray(a < b)
+        return self.lt(a, b)
 
     def round_away(self, a: Any) -> np.ndarray:
         """The nearest integer (in the format), halfway cases away from zero: a +- 1/2 truncated."""

@@ -14,6 +14,8 @@ from typing import Any
 
 import numpy as np
 
+from .lanes import LaneOps
+
 __all__ = ["F", "f32", "c_float_literal", "Float32Ops", "Float32", "FLOAT32"]
 
 #: numpy scalar type of a float32 value (test-state builders; the references use ``Float32Ops``)
@@ -48,7 +50,7 @@ def c_float_literal(x: float | np.floating) -> str:
 INTERLEAVE = 4
 
 
-class Float32Ops:
+class Float32Ops(LaneOps):
     """The reference's arithmetic in float32: each helper is one numpy operation.
 
     Every element-wise numpy operation on float32 operands rounds once, like
@@ -62,14 +64,6 @@ class Float32Ops:
     def const(self, x: float) -> np.float32:
         """A literal value of the format (rounded once)."""
         return self.real(x)
-
-    def array(self, values: Any) -> np.ndarray:
-        """An array of values of the format (table data already in the format)."""
-        return np.asarray(values, dtype=self.real)
-
-    def zeros(self, shape: Any) -> np.ndarray:
-        """Zeros of the format."""
-        return np.zeros(shape, self.real)
 
     def add(self, a: Any, b: Any) -> Any:
         """a + b, one rounding."""
@@ -98,38 +92,6 @@ class Float32Ops:
     def sqrt(self, a: Any) -> Any:
         """Square root, correctly rounded."""
         return np.sqrt(a)
-
-    def lt(self, a: Any, b: Any) -> np.ndarray:
-        """a < b (False for NaN)."""
-        return a < b
-
-    def le(self, a: Any, b: Any) -> np.ndarray:
-        """a <= b (False for NaN)."""
-        return a <= b
-
-    def gt(self, a: Any, b: Any) -> np.ndarray:
-        """a > b (False for NaN)."""
-        return a > b
-
-    def ge(self, a: Any, b: Any) -> np.ndarray:
-        """a >= b (False for NaN)."""
-        return a >= b
-
-    def eq(self, a: Any, b: Any) -> np.ndarray:
-        """a == b."""
-        return a == b
-
-    def ne(self, a: Any, b: Any) -> np.ndarray:
-        """a != b (True for NaN)."""
-        return a != b
-
-    def where(self, cond: Any, a: Any, b: Any) -> np.ndarray:
-        """Per lane: a where cond, else b (a selection, no arithmetic)."""
-        return np.where(cond, a, b).astype(self.real)
-
-    def select(self, conds: list[Any], choices: list[Any], default: Any) -> np.ndarray:
-        """Per lane: the first choice whose condition holds, else default."""
-        return np.select(conds, choices, default).astype(self.real)
 
     def trunc_int(self, a: Any) -> np.ndarray:
         """Conversion to int32 by truncation toward zero (C's ``(int32_t)x``)."""

@@ -56,14 +56,6 @@ def fixed_twin(model: Model) -> Model:
     return model.with_controller(number_format=QUANTISED)
 
 
-def _convert(x: np.ndarray, src: RecordLayout, dst: RecordLayout) -> np.ndarray:
-    """Records of ``src`` as records of ``dst``: each real field decoded to SI float64 and encoded once."""
-    out = dst.zeros(len(x))
-    for f in dst.fields:
-        out[f.name] = dst.encode(f.name, src.decode(f.name, x[f.name])) if f.kind == REAL else x[f.name]
-    return out
-
-
 #: bins of the error histograms
 HIST_BINS = 41
 
@@ -127,8 +119,8 @@ def _agreement(topo: Any, t32: Any, t_fx: Any, x32: np.ndarray, x_fx: np.ndarray
 def _errors(topo: Any, t_fx: Any, t32: Any, t_64: Any, x_fx: np.ndarray) -> dict[str, Any]:
     """Fixed and float32 outputs against the float64 ideal on the same physical states ``x_fx`` (fixed)."""
     lay_fx = topo.input_record.bind(t_fx.nf)
-    x64 = _convert(x_fx, lay_fx, topo.input_record.bind(number_format(IDEAL)))
-    x32 = _convert(x_fx, lay_fx, topo.input_record.bind(t32.nf))
+    x64 = in_format(x_fx, topo.input_record.bind(number_format(IDEAL)), lay_fx)
+    x32 = in_format(x_fx, topo.input_record.bind(t32.nf), lay_fx)
     ofx, o32, o64 = topo.step_batch(t_fx, x_fx), topo.step_batch(t32, x32), topo.step_batch(t_64, x64)
     ok = (ofx["fault"] == 0) & (o32["fault"] == 0) & (o64["fault"] == 0)
     out_fx, out_32 = topo.output_record.bind(t_fx.nf), topo.output_record.bind(t32.nf)
@@ -203,7 +195,7 @@ def analyse(model: Model, strategies: list[str] | None = None, random_states: in
         log(f"quantisation {model.name} / {s}: recording the fixed-point closed-loop states")
         own_fx = _at_most(topo.closed_loop_states(m_fx, topo.host_library(m_fx, t_fx, with_sim=True)),
                             max_closed_loop)
-        own32 = _convert(own_fx, topo.input_record.bind(t_fx.nf), topo.input_record.bind(t_32.nf))
+        own32 = in_format(own_fx, topo.input_record.bind(t_32.nf), topo.input_record.bind(t_fx.nf))
         rnd_fx = in_format(rnd32, topo.input_record.bind(t_fx.nf))
         t_64 = topo.derive(m_fx.with_controller(number_format=IDEAL, fixed_q=None))
         errors = {"closed_loop": _errors(topo, t_fx, t_32, t_64, cl_fx),
