@@ -38,9 +38,16 @@ def three_level_context(model: Model, t: ThreeLevelTables, target: str) -> dict:
         seq.append(TableRow(tuple(s), label))
     seq_pat = [TableRow(p, f"{r.label}: " + (" ".join(f"{x:03b}" for x in p) if vv.is_virtual(i) else f"{p[0]:03b}"))
                for i, (p, r) in enumerate(zip(t.seq_pat, seq))]
+    # 63-MPDTC: one case per group any row holds, its members with their segment patterns
+    # (known here, so the step resolves a group without table lookups or branches on the kind)
+    used = sorted({g for r in t.row_groups for g in r})
+    resolve_cases = [{"group": g, "label": t.group_labels[g],
+                      "members": [{"v": v, "virtual": vv.is_virtual(v), "pat": t.seq_pat[v]}
+                                  for v in t.groups[g][:t.group_n[g]]]} for g in used]
     return step_context(model, target, (INPUT, OUTPUT), FAULT_BITS, **{
         **table_fields(t), "topology_macro": "MPC_TOPOLOGY_THREE_LEVEL", "guard": GUARD, "dq": DQ,
         "first_virtual": FIRST_VIRTUAL, "seq": seq, "seq_pat": seq_pat, "groups": groups, "group_n": t.group_n,
+        "resolve_cases": resolve_cases,
         "max_members": mm, "rows": rows, "row_n": t.row_n, "max_groups": mg, "min_groups": min(t.row_n),
         "n_segments": N_SEGMENTS,
         "n_max_eval": N_MAX_EVAL, "safe_state": SAFE_STATE, "output_last": OUTPUT.fields[-1].name,

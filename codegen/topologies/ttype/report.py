@@ -15,8 +15,7 @@ def table_bytes(t: ThreeLevelTables) -> dict[str, int]:
         "ux, uy (float)": 2 * n_vec * 4,
         "seq (uint16)": n_vec * 7 * 2,
     }
-    if t.n_sectors > 1:  # 27-MPDTC's one row is unrolled at generation: no group or row tables
-        out["group_n, group_members (uint16)"] = len(t.groups) * (1 + t.max_members) * 2
+    if t.n_sectors > 1:  # groups are resolved by generated code (27-MPDTC: its one row too): no group tables
         out["row_n, rows (uint16)"] = len(t.row_groups) * (1 + t.max_groups) * 2
         out["end_state (uint16)"] = n_vec * 2
     return out
