@@ -23,13 +23,12 @@ from codegen.topologies.ttype.records import (
 
 def three_level_context(model: Model, t: ThreeLevelTables, target: str) -> dict:
     """Template context: values to print, already derived."""
-    mg, mm = t.max_groups, t.max_members
+    mg = t.max_groups
     rows = [
         TableRow(tuple(r) + (0,) * (mg - len(r)),
              f"{lab}: " + " ".join(t.group_labels[g] for g in r))
         for r, lab in zip(t.row_groups, t.row_labels)
     ]
-    groups = [TableRow(tuple(g) + (0,) * (mm - len(g)), lab) for g, lab in zip(t.groups, t.group_labels)]
     seq = []
     for i, s in enumerate(t.seq):
         label = vv.vector_name(i)
@@ -38,17 +37,20 @@ def three_level_context(model: Model, t: ThreeLevelTables, target: str) -> dict:
         seq.append(TableRow(tuple(s), label))
     seq_pat = [TableRow(p, f"{r.label}: " + (" ".join(f"{x:03b}" for x in p) if vv.is_virtual(i) else f"{p[0]:03b}"))
                for i, (p, r) in enumerate(zip(t.seq_pat, seq))]
-    # 63-MPDTC: one case per group any row holds, its members with their segment patterns
-    # (known here, so the step resolves a group without table lookups or branches on the kind)
-    used = sorted({g for r in t.row_groups for g in r})
-    resolve_cases = [{"group": g, "label": t.group_labels[g],
-                      "members": [{"v": v, "virtual": vv.is_virtual(v), "pat": t.seq_pat[v]}
-                                  for v in t.groups[g][:t.group_n[g]]]} for g in used]
+    # each group with its members and their segment patterns, known here, so the step resolves a
+    # group without table lookups or branches on the kind: 63-MPDTC one case per group any row
+    # holds, 27-MPDTC its one row's groups in row order
+    cases = {g: {"group": g, "label": t.group_labels[g],
+                 "members": [{"v": v, "virtual": vv.is_virtual(v), "pat": t.seq_pat[v]}
+                             for v in t.groups[g][:t.group_n[g]]]} for g in range(len(t.groups))}
+    resolve_cases = [cases[g] for g in sorted({g for r in t.row_groups for g in r})]
+    row_cases = [cases[g] for g in t.row_groups[0]] if t.n_sectors == 1 else []
     return step_context(model, target, (INPUT, OUTPUT), FAULT_BITS, **{
         **table_fields(t), "topology_macro": "MPC_TOPOLOGY_THREE_LEVEL", "guard": GUARD, "dq": DQ,
-        "first_virtual": FIRST_VIRTUAL, "seq": seq, "seq_pat": seq_pat, "groups": groups, "group_n": t.group_n,
-        "resolve_cases": resolve_cases,
-        "max_members": mm, "rows": rows, "row_n": t.row_n, "max_groups": mg, "min_groups": min(t.row_n),
+        "first_virtual": FIRST_VIRTUAL, "seq": seq, "seq_pat": seq_pat,
+        "resolve_cases": resolve_cases, "row_cases": row_cases,
+        "row_members": sum(t.group_n[g] for g in t.row_groups[0]) if row_cases else 0,
+        "rows": rows, "row_n": t.row_n, "max_groups": mg, "min_groups": min(t.row_n),
         "n_segments": N_SEGMENTS,
         "n_max_eval": N_MAX_EVAL, "safe_state": SAFE_STATE, "output_last": OUTPUT.fields[-1].name,
         "sincos_bound": sincos_bound(float(t.nf.decode("rad", t.const("ANGLE_GUARD_RAD")))
