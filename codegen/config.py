@@ -554,7 +554,7 @@ def _check_scenario_set(ck: _Checker) -> None:
 def _check_two_level_controller(ck: _Checker) -> None:
     """``controller.psi_ref`` and ``controller.cost`` choose the two-level MPTC's flux reference and
     cost; the T-type MPDTC has its own (MTPA flux reference, cost eq. (7)): a t-type config that sets
-    them is refused rather than silently ignored."""
+    them to anything but their defaults is refused rather than silently ignored."""
     v = ck.values
     if v["inverter.topology"] == "t-type":
         for path in ("controller.psi_ref", "controller.cost"):

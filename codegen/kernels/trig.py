@@ -1,6 +1,7 @@
 """Generated sin/cos of the rotor angle (numerics.md "Float32 path").
 
-The step needs sin and cos of theta_e without libm.  The generator emits a
+The step needs sin and cos of theta_e without libm trigonometry (its one libm function is the exact
+``roundf``, one VRINTA on the Cortex-M7).  The generator emits a
 fixed sequence of single float32 operations; ``sincos_f32`` below performs
 the same sequence in numpy float32, so the C and the reference agree bit for
 bit, and the accuracy of the approximation is a separately tested property.
@@ -129,9 +130,9 @@ def _sincos(ops: Ops, x: Any, k: SinCosCoeffs) -> tuple[Any, Any]:
     return s_out, c_out
 
 
-def sincos_f32(x: np.ndarray, k: SinCosCoeffs | None = None) -> tuple[np.ndarray, np.ndarray]:
+def sincos_f32(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """sin and cos of float32 ``x``, the exact operation sequence of the C."""
-    return _sincos(FLOAT32.ops, x, k or sincos_coeffs())
+    return _sincos(FLOAT32.ops, x, sincos_coeffs())
 
 
 def sincos_constants() -> list[tuple[str, float, str, str]]:

@@ -21,6 +21,19 @@ from codegen.topologies.ttype.records import (
 )
 
 
+def _distinct_patterns(case: dict) -> dict:
+    """27-MPDTC's case of a group (every member basic, |V_o(k+2)| a function of its one pattern):
+    a member whose pattern an earlier member has is never strictly smaller, so it is left out of
+    the comparisons (NNN and PPP share pattern 000)."""
+    seen: set[int] = set()
+    members = []
+    for mb in case["members"]:
+        if mb["pat"][0] not in seen:
+            seen.add(mb["pat"][0])
+            members.append(mb)
+    return {**case, "members": members}
+
+
 def three_level_context(model: Model, t: ThreeLevelTables, target: str) -> dict:
     """Template context: values to print, already derived."""
     mg = t.max_groups
@@ -44,7 +57,7 @@ def three_level_context(model: Model, t: ThreeLevelTables, target: str) -> dict:
                  "members": [{"v": v, "virtual": vv.is_virtual(v), "pat": t.seq_pat[v]}
                              for v in t.groups[g][:t.group_n[g]]]} for g in range(len(t.groups))}
     resolve_cases = [cases[g] for g in sorted({g for r in t.row_groups for g in r})]
-    row_cases = [cases[g] for g in t.row_groups[0]] if t.n_sectors == 1 else []
+    row_cases = [_distinct_patterns(cases[g]) for g in t.row_groups[0]] if t.n_sectors == 1 else []
     return step_context(model, target, (INPUT, OUTPUT), FAULT_BITS, **{
         **table_fields(t), "topology_macro": "MPC_TOPOLOGY_THREE_LEVEL", "guard": GUARD, "dq": DQ,
         "first_virtual": FIRST_VIRTUAL, "seq": seq, "seq_pat": seq_pat,

@@ -15,9 +15,13 @@ def table_bytes(t: ThreeLevelTables) -> dict[str, int]:
         "ux, uy (float)": 2 * n_vec * 4,
         "seq (uint16)": n_vec * 7 * 2,
     }
-    if t.n_sectors > 1:  # groups are resolved by generated code (27-MPDTC: its one row too): no group tables
+    # groups are resolved by generated code: no group tables; 27-MPDTC's one row is unrolled too,
+    # only its group count remains
+    if t.n_sectors > 1:
         out["row_n, rows (uint16)"] = len(t.row_groups) * (1 + t.max_groups) * 2
         out["end_state (uint16)"] = n_vec * 2
+    else:
+        out["row_n (uint16)"] = len(t.row_groups) * 2
     return out
 
 
