@@ -17,13 +17,12 @@ from codegen.errors import MpcgenError
 from codegen.records import REAL
 from codegen.stages import emulate
 from codegen.stages import firmware as firmware
-from codegen.stages.fwdata import layouts, selftest_states, trajectory_states
+from codegen.stages.fwdata import N_BENCH, layouts, selftest_states, trajectory_states
 from codegen.topology import topology_of
 
 from fw_support import CASE_IDS, CASES, SPMSM, TTYPE, example, needs_arm, needs_qemu
 
 N_SELFTEST = 10_000
-N_BENCH = 2_000
 #: a corrupted expectation per topology: (set index, field, record, element or None)
 CORRUPT = {"spmsm": ("s3", [(5, "te_est_nm", None), (7, "cand", 1)]),
            "tlevel": ("mpdtc27", [(150, "costs", 18), (160, "cand", 3)])}

@@ -25,7 +25,7 @@ from hil_support import CASE_IDS, CASES, SPMSM, example
 
 from codegen.compare import mismatch_mask
 from codegen.stages import emulate
-from codegen.stages.fwdata import trajectory_states
+from codegen.stages.fwdata import N_BENCH, trajectory_states
 from codegen.topology import topology_of
 from hil.boards import open_board
 from hil.cli import main
@@ -37,9 +37,6 @@ from hil.session import Session
 from conftest import require_tool
 
 pytestmark = pytest.mark.slow
-
-#: bench trajectory states replayed per strategy (as many as `mpcgen bench --emulated` times)
-N_BENCH = 2000
 
 
 @pytest.fixture(autouse=True)

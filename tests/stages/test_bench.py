@@ -6,6 +6,7 @@ import json
 import pytest
 
 from codegen.cli import main
+from codegen.stages.fwdata import N_BENCH
 
 from conftest import SPMSM, TWO_LEVEL, require_tool
 
@@ -58,6 +59,6 @@ def test_emulated_bench_fixed_point_beside_float32(tmp_path, capsys):
         assert e["m7_instructions_per_step"] == e["m7_instructions_per_step_fixed"] > 50
         assert e["m7_instructions_per_step_float32"] > 50
         by = e["m7_by_number_format"]
-        assert by["fixed"]["states_checked"] == 1000 + 2000  # every one bit-exact, or bench raises
+        assert by["fixed"]["states_checked"] == 1000 + N_BENCH  # every one bit-exact, or bench raises
     out = capsys.readouterr().out
     assert "fixed" in out and "float32" in out

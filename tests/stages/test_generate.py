@@ -11,7 +11,7 @@ from conftest import (
     TWO_LEVEL,
     assert_c28x_clean,
     assert_symbols_prefixed,
-    compile_m7,
+    check_target_c,
     compile_strict,
 )
 
@@ -27,10 +27,7 @@ def test_compiles_strict_for_every_target(tmp_path, cfg, strategy):
     for target in ("stm32h743", "tms320f28377", "host"):
         out = tmp_path / target
         files = _generate(cfg, target, out, "--strategy", strategy, "--tables", "published")
-        src = [f for f in files if f.name.endswith("_mpc.c")][0]
-        compile_strict(src, tmp_path / "x.o")
-        if target == "stm32h743":
-            compile_m7(src, tmp_path / "m7.o")
+        check_target_c(out, tmp_path, target)
         pi = [f for f in files if f.name.endswith("_speed_pi.c")][0]
         compile_strict(pi, tmp_path / "pi.o")
 
