@@ -10,7 +10,7 @@ import numpy as np
 
 from codegen import __version__
 
-__all__ = ["clean_json", "versions", "fmt_cell", "flagged_cell", "footnotes", "fault_warning", "WINDOW_HEAD", "window_cells"]
+__all__ = ["clean_json", "metric_sets", "versions", "fmt_cell", "flagged_cell", "footnotes", "fault_warning", "WINDOW_HEAD", "window_cells"]
 
 
 def clean_json(v: Any) -> Any:
@@ -95,3 +95,16 @@ def write_csv_rows(path: Path, rows: list[dict[str, object]]) -> None:
         w = csv.DictWriter(fh, fieldnames=list(columns))
         w.writeheader()
         w.writerows(rows)
+
+
+def metric_sets(result: dict[str, Any]) -> list[tuple[str, str | None, dict[str, Any]]]:
+    """(strategy, scenario run or None, metrics) of one run's simulate result."""
+    out: list[tuple[str, str | None, dict[str, Any]]] = []
+    for s, m in result.get("strategies", {}).items():
+        if not isinstance(m, dict):
+            continue
+        if "faults" in m or "T_rip_RMSE_nm" in m:
+            out.append((s, None, m))
+        else:  # a scenario set: one metrics dict per scenario run
+            out.extend((s, name, mm) for name, mm in m.items() if isinstance(mm, dict))
+    return out

@@ -21,7 +21,7 @@ from typing import Any
 from codegen import __version__
 from codegen.model import Model
 from codegen.plotting import save_figure
-from codegen.results import clean_json, versions, write_csv_rows
+from codegen.results import clean_json, metric_sets, versions, write_csv_rows
 
 __all__ = ["assemble", "flat_rows", "write_json", "write_csv", "table", "plot", "PLOT_METRICS"]
 
@@ -56,19 +56,6 @@ def assemble(plan: Any, model: Model, outs: list[dict[str, Any]], timing: dict[s
         "runs": runs,
         "timing": timing,
     })
-
-
-def metric_sets(result: dict[str, Any]) -> list[tuple[str, str | None, dict[str, Any]]]:
-    """(strategy, scenario run or None, metrics) of one run's simulate result."""
-    out: list[tuple[str, str | None, dict[str, Any]]] = []
-    for s, m in result.get("strategies", {}).items():
-        if not isinstance(m, dict):
-            continue
-        if "faults" in m or "T_rip_RMSE_nm" in m:
-            out.append((s, None, m))
-        else:  # a scenario set: one metrics dict per scenario run
-            out.extend((s, name, mm) for name, mm in m.items() if isinstance(mm, dict))
-    return out
 
 
 def _scalar(v: Any) -> bool:

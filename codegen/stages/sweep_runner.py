@@ -25,8 +25,7 @@ from typing import Any
 
 from codegen.errors import MpcgenError, UsageError
 from codegen.model import Model
-from codegen.results import clean_json
-from codegen.stages.sweep_output import metric_sets
+from codegen.results import clean_json, metric_sets
 from codegen.topology import topology_of
 
 __all__ = ["Runner", "check_runner_args", "run_task", "run_plan", "TIMING_KEYS"]

@@ -72,6 +72,7 @@ from codegen.metrics import (
 )
 from codegen.model import Model
 from codegen.topologies.ttype.records import FAULT_BITS
+from codegen.topologies.ttype.vectors import OOO
 
 if TYPE_CHECKING:  # pragma: no cover
     from codegen.topologies.ttype.sim import Trace
@@ -90,7 +91,6 @@ __all__ = [
 UAB_GRID_S = 1e-6
 #: Highest harmonic frequency counted in THD_uab.
 UAB_F_MAX_HZ = 50e3
-_OOO = 13
 
 
 def _levels(states: np.ndarray) -> np.ndarray:
@@ -197,7 +197,7 @@ def line_jump_histogram(uab_v: Any, seg_s: Any, udc_v: float, uab_before: float 
     }
 
 
-def leg_level_changes(seg_states: Any, seg_s: Any, initial_state: int = _OOO) -> np.ndarray:
+def leg_level_changes(seg_states: Any, seg_s: Any, initial_state: int = OOO) -> np.ndarray:
     """Per-period one-level leg changes from (n, 7) applied states and durations.
 
     Python cross-check of the C count (``trace.leg_changes``): sum over legs

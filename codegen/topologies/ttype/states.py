@@ -21,10 +21,8 @@ from codegen import teststates as common
 from codegen.model import Model
 from codegen.numfmt.float32 import F
 from codegen.topologies.ttype.derive import ThreeLevelTables, guard_limits, t_n_min
-from codegen.topologies.ttype.records import INPUT, INPUT_DTYPE, SAFE_STATE
-
-#: the zero vector OOO (the safe state)
-OOO = SAFE_STATE
+from codegen.topologies.ttype.records import INPUT, INPUT_DTYPE
+from codegen.topologies.ttype.vectors import OOO
 
 
 def random_states(model: Model, n: int, seed: int = 1) -> np.ndarray:
