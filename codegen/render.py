@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -18,6 +17,7 @@ import jinja2
 
 from codegen import __version__
 from codegen.kernels.consts import Const
+from codegen.kernels.trig import cos_names, sin_names, table_index_bound
 from codegen.model import Model
 from codegen.numfmt import number_format
 from codegen.numfmt.float32 import FLOAT32
@@ -110,10 +110,11 @@ def render_files(templates: dict[str, str], ctx: dict) -> dict[str, str]:
     return {name: env.get_template(tpl).render(ctx) for name, tpl in templates.items()}
 
 
-def sincos_bound(angle_max_rad: float, what: str) -> str:
-    """The comment on the sin/cos quadrant count: the largest |n| = round(|x| 2/pi) for |x| up to
+def sincos_bound(model: Model, angle_max_rad: float, what: str) -> str:
+    """The comment on the sin/cos table index: the largest |n| = round(|x| N/(2 pi)) for |x| up to
     ``angle_max_rad`` (``what`` says where that bound comes from)."""
-    return f"|n| <= {math.floor(angle_max_rad * 2.0 / math.pi + 0.5)}: |x| <= {what} = {angle_max_rad:.6g} rad"
+    nf = number_format(model.controller.number_format)
+    return f"|n| <= {table_index_bound(nf, angle_max_rad)}: |x| <= {what} = {angle_max_rad:.6g} rad"
 
 
 def step_context(model: Model, target: str, records: tuple[Record, Record],
@@ -134,6 +135,9 @@ def step_context(model: Model, target: str, records: tuple[Record, Record],
         "guard_bits": {name: bits for name, bits in guard_bits.items() if bits is not None},
         "dt_s": model.controller.dt_s,
         "angle_guard_rad": nf.angle_guard_rad,
+        "sincos_n": nf.sincos_form.table_n,
+        "sin_coeffs": sin_names(nf),
+        "cos_coeffs": cos_names(nf),
         "input_fields": records[0].bind(nf).members,
         "output_fields": records[1].bind(nf).members,
         **values,

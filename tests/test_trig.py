@@ -1,8 +1,18 @@
 """The generated sin/cos: accuracy (a property) and determinism of the constants."""
 import numpy as np
 
-from codegen.kernels.trig import ANGLE_GUARD_RAD, sincos_coeffs, sincos_f32
-from codegen.numfmt.float32 import c_float_literal, f32
+from codegen.kernels.trig import (
+    ANGLE_GUARD_RAD,
+    cos_names,
+    sin_names,
+    sincos_constants,
+    sincos_f32,
+    sincos_ops,
+    sincos_table,
+    table_index_bound,
+)
+from codegen.numfmt.fixed import FIXED
+from codegen.numfmt.float32 import FLOAT32, c_float_literal, f32
 
 
 def test_accuracy_over_guard_range():
@@ -24,13 +34,32 @@ def test_exact_values_at_zero():
     assert s[0] == 0 and c[0] == 1 and c[1] == 1
 
 
-def test_coefficients_are_float32_and_stable():
-    k = sincos_coeffs()
-    for v in (k.two_over_pi, k.pio2_hi, k.pio2_lo, *k.s, *k.c):
-        assert isinstance(v, np.float32)
-    # PIO2_HI has at most 15 significant bits, so n * PIO2_HI is exact for |n| <= 512
-    m = int(np.float32(k.pio2_hi).view(np.uint32)) & 0x7FFFFF
-    assert m & ((1 << (23 - 14)) - 1) == 0
+def test_step_split_keeps_fn_hi_exact():
+    """fn STEP_HI is exact in float32 for every table index the angle guard lets in."""
+    k = {name: v for name, v, *_ in sincos_constants(FLOAT32)}
+    hi = f32(k["SINCOS_STEP_HI"])
+    assert float(hi) == k["SINCOS_STEP_HI"]  # exactly representable
+    assert float(hi) + k["SINCOS_STEP_LO"] == 2 * np.pi / FLOAT32.sincos_form.table_n
+    n_max = table_index_bound(FLOAT32)
+    assert n_max == 10430  # 256 rad * 256 / (2 pi)
+    fn = np.arange(-2 * n_max, 2 * n_max + 1, dtype=np.float64)  # twice: the T-type extrapolates past the guard
+    assert np.array_equal((fn.astype(np.float32) * hi).astype(np.float64), fn * float(hi))
+
+
+def test_table_and_coefficients_per_format():
+    """float32: 256 entries and one term each; fixed point: the quadrant table (0, +-1 exactly) and
+    the degree-7/8 polynomial."""
+    tab = sincos_table(FLOAT32)
+    assert len(tab) == 512 and all(isinstance(v, np.float32) for v in tab)
+    assert (tab[0], tab[1]) == (0.0, 1.0)
+    assert (sin_names(FLOAT32), cos_names(FLOAT32)) == (["SIN_S3"], ["COS_C2"])
+    assert (sin_names(FIXED), cos_names(FIXED)) == (["SIN_S3", "SIN_S5", "SIN_S7"], ["COS_C2", "COS_C4", "COS_C6", "COS_C8"])
+    assert table_index_bound(FIXED) == 5  # 8 rad * 4 / (2 pi)
+    k = {name: v for name, v, *_ in sincos_constants(FLOAT32)}
+    assert abs(k["SIN_S3"] + 1 / 6) < 1e-5 and abs(k["COS_C2"] + 0.5) < 1e-5  # near Taylor: least squares
+    # essential operations of one sin/cos (the cycle bound): 19 float operations and 7 loads in float32
+    assert sincos_ops(FLOAT32) == (19, 7)
+    assert sincos_ops(FIXED) == (29, 12)
 
 
 def test_hex_literals_round_trip():

@@ -64,10 +64,10 @@ def in_format(nf: NumberFormat, consts: Iterable[Const]) -> tuple[Const, ...]:
     return tuple(Const(c.name, nf.const(float(c.value), c.unit), c.unit, c.doc) for c in consts)
 
 
-def leading_constants(limits: dict[str, float]) -> list[Const]:
-    """Constants every step starts with (float64 values; ``in_format`` rounds them): sin/cos
-    coefficients, guard limits, the Clarke gain."""
-    out = [Const(*c) for c in sincos_constants()]
+def leading_constants(limits: dict[str, float], nf: NumberFormat) -> list[Const]:
+    """Constants every step starts with (float64 values; ``in_format`` rounds them): the sin/cos
+    constants of the step's format ``nf``, guard limits, the Clarke gain."""
+    out = [Const(*c) for c in sincos_constants(nf)]
     out += [Const(name, float(v), GUARD_UNITS.get(name, ""), "input guard limit") for name, v in limits.items()]
     out.append(Const("INV_SQRT3", 1 / math.sqrt(3), "", "Clarke: i_beta = (i_a + 2 i_b)/sqrt(3)"))
     return out

@@ -22,7 +22,7 @@ from collections.abc import Iterable
 
 from codegen.errors import ConfigError
 from codegen.kernels.consts import Const, guard_limits, in_format
-from codegen.kernels.trig import sincos_constants
+from codegen.kernels.trig import is_sincos_constant
 from codegen.model import Model
 from codegen.numfmt import NumberFormat, number_format
 from codegen.numfmt.scaling import BaseRanges, RepresentationError, Signal
@@ -45,8 +45,6 @@ CONST_FIELDS: dict[str, str] = {
     "ASC_OMEGA_MIN_RAD_S": "controller.asc_min_speed_rpm", "MTPA_INV_STEP": "controller.psi_ref",
     "T_FLOOR_NM": "controller.cost",
 }
-#: constants whose precision is a property of the sin/cos approximation (tested), not checked per constant
-_APPROXIMATION = frozenset(name for name, *_ in sincos_constants())
 
 
 def motor_ranges(model: Model) -> tuple[BaseRanges, list[Signal]]:
@@ -81,7 +79,7 @@ def step_format(model: Model, consts: Iterable[Const], extra: Iterable[Signal] =
     c = model.controller
     base, sigs = motor_ranges(model)
     sigs += [Signal(k.name, k.unit, abs(float(k.value)), CONST_FIELDS.get(k.name, "controller.number_format"),
-                    exact=k.name not in _APPROXIMATION) for k in consts]
+                    exact=not is_sincos_constant(k.name)) for k in consts]
     sigs += list(extra)
     try:
         nf = number_format(c.number_format).for_step(sigs, base, c.fixed_q)

@@ -2,92 +2,133 @@
 
 The step needs sin and cos of theta_e without libm trigonometry (its one libm function is the exact
 ``roundf``, one VRINTA on the Cortex-M7).  The generator emits a
-fixed sequence of single float32 operations; ``sincos_f32`` below performs
-the same sequence in numpy float32, so the C and the reference agree bit for
-bit, and the accuracy of the approximation is a separately tested property.
+fixed sequence of single operations; ``sincos`` below performs the same
+sequence through the format's operations, so the C and the reference agree bit
+for bit, and the accuracy of the approximation is a separately tested property.
 
-Algorithm (per numerics.md: explicit range reduction, then polynomials):
+Algorithm (per numerics.md: explicit range reduction, then polynomials), with a table of sin and
+cos at the N multiples of 2 pi / N (``SinCosForm.table_n``, a number-format property):
 
-1. quadrant   y = x * (2/pi);  fn = round(y) (nearest, halfway away from zero), n = (int)fn
-2. Cody-Waite r = (x - n*PIO2_HI) - n*PIO2_LO, |r| <= pi/4 (+ rounding);
-   PIO2_HI has few enough significant bits that n*PIO2_HI is exact for
-   |n| <= 2^(24 - PIO2_HI_BITS).
-3. sin r = r + r^3 (S1 + r^2 (S2 + r^2 S3)),
-   cos r = 1 + r^2 (C1 + r^2 (C2 + r^2 (C3 + r^2 C4)))   (Horner)
-4. quadrant q = n mod 4 selects (sin, cos) = (s, c), (c, -s), (-s, -c), (-c, s).
+1. index      y = x * N/(2 pi);  fn = round(y) (nearest, halfway away from zero), n = (int)fn,
+              k = n mod N (two's complement: the low bits of n)
+2. Cody-Waite r = (x - fn STEP_HI) - fn STEP_LO, |r| <= pi/N (+ rounding);
+   STEP_HI has few enough significant bits that fn STEP_HI is exact for every |n| the guard lets in
+3. sin r = r + r^3 (S3 + r^2 (S5 + ...)),  cos r = 1 + r^2 (C2 + r^2 (C4 + ...))  (Horner)
+4. angle sum  sin x = sin_k cos r + cos_k sin r,  cos x = cos_k cos r - sin_k sin r
+
+float32: N = 256, so |r| <= pi/256 and one term each suffices (a 2 KB table instead of a
+degree-8 polynomial and a quadrant select); fixed point: N = 4, the quadrant (the table's 0 and
++-1 make step 4 exact, and y stays within the per-unit range), with three and four terms.
 """
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from functools import lru_cache
+from functools import cache
 from typing import Any
 
 import numpy as np
 
-from codegen.numfmt import Ops
-from codegen.numfmt.float32 import FLOAT32, f32
+from codegen.numfmt import NumberFormat, Ops
+from codegen.numfmt.float32 import FLOAT32
+from codegen.numfmt.trigform import SinCosForm
 
-#: essential operations of one generated sin/cos, for the cycle bound (``Topology.essential_ops``):
-#: range reduction (8), odd polynomial (7), even polynomial (8), quadrant select (4); its 9 constants
-SINCOS_FP, SINCOS_LOADS = 27, 9
-#: Largest |theta_e| the step accepts (rad); beyond it the input guard trips.
+#: Largest |theta_e| the float32 step accepts (rad); beyond it the input guard trips.
 ANGLE_GUARD_RAD = FLOAT32.angle_guard_rad
-_PIO2_HI_BITS = 15  # n <= 2^(24-15) = 512 > 256 * 2/pi + 1
+#: the split of STEP_HI keeps at most this many significant bits (float32 has 24)
+_MAX_HI_BITS = 15
 
 
-@dataclass(frozen=True)
-class SinCosCoeffs:
-    """Float32 constants of the generated sin/cos (all exact float32 values)."""
-
-    two_over_pi: np.float32
-    pio2_hi: np.float32
-    pio2_lo: np.float32
-    s: tuple[np.float32, np.float32, np.float32]  # r^3, r^5, r^7
-    c: tuple[np.float32, np.float32, np.float32, np.float32]  # r^2 .. r^8
+def table_index_bound(nf: NumberFormat, angle_max_rad: float | None = None) -> int:
+    """The largest |n| = round(|x| N / (2 pi)) for |x| up to ``angle_max_rad`` (default: the format's
+    angle guard)."""
+    x = nf.angle_guard_rad if angle_max_rad is None else angle_max_rad
+    return math.floor(x * nf.sincos_form.table_n / (2.0 * math.pi) + 0.5)
 
 
-def _split_pio2() -> tuple[float, float]:
-    hi = math.pi / 2
-    m, e = math.frexp(hi)
-    scale = 2.0 ** _PIO2_HI_BITS
-    hi_trunc = math.floor(m * scale) / scale * 2.0**e
-    return hi_trunc, math.pi / 2 - hi_trunc
+def _split_step(nf: NumberFormat) -> tuple[float, float]:
+    """2 pi / N as HI + LO, HI with 23 - bits(n_max) significant bits (at most ``_MAX_HI_BITS``): fn HI
+    is exact in float32 for |n| < 2^(24 - HI bits), twice the guard's n_max and more (the T-type's
+    extrapolated angles go a little beyond the guard)."""
+    step = 2.0 * math.pi / nf.sincos_form.table_n
+    bits = min(_MAX_HI_BITS, 23 - table_index_bound(nf).bit_length())
+    m, e = math.frexp(step)
+    hi = math.floor(m * 2.0**bits) / 2.0**bits * 2.0**e
+    return hi, step - hi
 
 
-def _fit(func, powers: list[int], lead: float) -> np.ndarray:
-    """Least-squares fit on Chebyshev nodes of [0, pi/4] (close to minimax).
-
-    Fits func(r) - lead-term by sum(c_k r^k) with the given powers, in float64.
-    """
+def _fit(func: Any, powers: list[int], r_max: float) -> np.ndarray:
+    """Least-squares fit on Chebyshev nodes of [0, r_max] (close to minimax), float64: func(r) - its
+    lead term (r for sin, 1 for cos) as sum(c_k r^k) over ``powers``."""
     k = np.arange(4000)
-    r = (np.pi / 8) * (1 - np.cos((k + 0.5) * np.pi / len(k)))  # nodes in [0, pi/4]
+    r = (r_max / 2) * (1 - np.cos((k + 0.5) * np.pi / len(k)))
     r = r[r > 0]
     a = np.stack([r**p for p in powers], axis=1)
-    rhs = func(r) - lead * (r if lead and powers[0] % 2 == 1 else 1.0)
-    # relative weighting: minimise relative error of the correction
-    coef, *_ = np.linalg.lstsq(a, rhs, rcond=None)
+    coef, *_ = np.linalg.lstsq(a, func(r), rcond=None)
     return coef
 
 
-@lru_cache(maxsize=1)
-def sincos_coeffs64() -> tuple[float, ...]:
-    """The constants of the generated sin/cos in float64, derived once (the float64 fit), in the order
-    2/pi, PIO2_HI, PIO2_LO, S3, S5, S7, C2, C4, C6, C8: every number format rounds them once."""
-    hi, lo = _split_pio2()
-    s = _fit(np.sin, [3, 5, 7], 1.0)
-    c = _fit(lambda r: np.cos(r) - 1.0, [2, 4, 6, 8], 0.0)
-    return (2.0 / math.pi, hi, lo, *(float(v) for v in s), *(float(v) for v in c))
+@cache
+def _coeffs64(table_n: int, sin_terms: int, cos_terms: int) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    r_max = math.pi / table_n
+    s = _fit(lambda r: np.sin(r) - r, [2 * i + 3 for i in range(sin_terms)], r_max)
+    c = _fit(lambda r: np.cos(r) - 1.0, [2 * i + 2 for i in range(cos_terms)], r_max)
+    return tuple(float(v) for v in s), tuple(float(v) for v in c)
 
 
-@lru_cache(maxsize=1)
-def sincos_coeffs() -> SinCosCoeffs:
-    """The coefficients rounded once to float32 (the float32 step's; tests and ``sincos_f32``)."""
-    v = [f32(x) for x in sincos_coeffs64()]
-    return SinCosCoeffs(two_over_pi=v[0], pio2_hi=v[1], pio2_lo=v[2], s=(v[3], v[4], v[5]), c=(v[6], v[7], v[8], v[9]))
+def sin_names(nf: NumberFormat) -> list[str]:
+    """Names of the sin coefficients, lowest power first (SIN_S3, SIN_S5, ...)."""
+    return [f"SIN_S{2 * i + 3}" for i in range(nf.sincos_form.sin_terms)]
 
 
-def _horner(ops: Any, coeffs: Any, x: Any) -> Any:
+def cos_names(nf: NumberFormat) -> list[str]:
+    """Names of the cos coefficients, lowest power first (COS_C2, COS_C4, ...)."""
+    return [f"COS_C{2 * i + 2}" for i in range(nf.sincos_form.cos_terms)]
+
+
+def is_sincos_constant(name: str) -> bool:
+    """True for a constant of the generated sin/cos (its precision is the approximation's, tested)."""
+    return name.startswith(("SINCOS_", "SIN_S", "COS_C"))
+
+
+def sincos_constants(nf: NumberFormat) -> list[tuple[str, float, str, str]]:
+    """(name, float64 value, unit, meaning) of every constant the generated sin/cos of format ``nf``
+    uses (the format rounds each once)."""
+    f = nf.sincos_form
+    hi, lo = _split_step(nf)
+    s, c = _coeffs64(f.table_n, f.sin_terms, f.cos_terms)
+    out = [
+        ("SINCOS_PER_RAD", f.table_n / (2.0 * math.pi), "1/rad", f"N/(2 pi), N = {f.table_n}: table index of theta_e"),
+        ("SINCOS_STEP_HI", hi, "rad", "2 pi/N, high part (Cody-Waite: fn STEP_HI exact)"),
+        ("SINCOS_STEP_LO", lo, "rad", "2 pi/N - SINCOS_STEP_HI"),
+    ]
+    out += [(n, v, "", f"sin r = r + r^3 (S3 + r^2 (S5 + ...)): r^{n[5:]} (least squares on [0, pi/N])")
+            for n, v in zip(sin_names(nf), s)]
+    out += [(n, v, "", f"cos r = 1 + r^2 (C2 + r^2 (C4 + ...)): r^{n[5:]} (least squares on [0, pi/N])")
+            for n, v in zip(cos_names(nf), c)]
+    return out
+
+
+def sincos_table(nf: NumberFormat) -> tuple[Any, ...]:
+    """sin and cos of 2 pi k / N for k = 0 .. N-1, interleaved (sin_0, cos_0, sin_1, ...), each rounded
+    once to the format ``nf`` (a scaled format for fixed point)."""
+    n = nf.sincos_form.table_n
+    return tuple(nf.const(f(2.0 * math.pi * k / n), "") for k in range(n) for f in (math.sin, math.cos))
+
+
+#: essential operations of one generated sin/cos besides its polynomials, for the cycle bound
+#: (``Topology.essential_ops``): y, round, convert, Cody-Waite (4), r^2, 1 + ..., r + ..., the angle
+#: sum (6); loads: 3 constants and the two table values
+_SINCOS_FP_BASE, _SINCOS_LOADS_BASE = 16, 5
+
+
+def sincos_ops(nf: NumberFormat) -> tuple[int, int]:
+    """(float operations, loads) of one generated sin/cos in format ``nf`` (the cycle bound)."""
+    f = nf.sincos_form
+    poly = 2 * f.sin_terms + 2 * f.cos_terms - 1  # Horner (mul, add per extra term) and x r for sin
+    return _SINCOS_FP_BASE + poly, _SINCOS_LOADS_BASE + f.sin_terms + f.cos_terms
+
+
+def _horner(ops: Ops, coeffs: Any, x: Any) -> Any:
     """(((c_n x + c_{n-1}) x + ...) + c_0) x, lowest coefficient first in ``coeffs``: the operation
     order of the C polynomials (one multiply and one add per coefficient)."""
     p = ops.mul(coeffs[-1], x)
@@ -97,57 +138,35 @@ def _horner(ops: Any, coeffs: Any, x: Any) -> Any:
     return p
 
 
-def coeffs_of(k: Any) -> SinCosCoeffs:
-    """The coefficients as a step's constants hold them (``k.TWO_OVER_PI`` ...: in the step's format)."""
-    return SinCosCoeffs(k.TWO_OVER_PI, k.PIO2_HI, k.PIO2_LO, (k.SIN_S3, k.SIN_S5, k.SIN_S7),
-                        (k.COS_C2, k.COS_C4, k.COS_C6, k.COS_C8))
-
-
-def sincos(ops: Ops, x: Any, consts: Any) -> tuple[Any, Any]:
+def sincos(ops: Ops, x: Any, consts: Any, table: Any, form: SinCosForm) -> tuple[Any, Any]:
     """sin and cos of ``x`` through the format's ``ops``: the exact operation sequence of the C
     (``templates/common/kernels.j2`` ``sincos_fn``).  ``consts``: the step's constants
-    (``Constants``; their sin/cos coefficients in the format)."""
-    return _sincos(ops, x, coeffs_of(consts))
-
-
-def _sincos(ops: Ops, x: Any, k: SinCosCoeffs) -> tuple[Any, Any]:
+    (``Constants``, in the format), ``table``: ``sincos_table`` of the format, ``form``: its
+    ``SinCosForm``."""
+    k = consts
+    tab = np.asarray(table)
     x = ops.array(x)
-    y = ops.mul(x, k.two_over_pi)
+    y = ops.mul(x, k.SINCOS_PER_RAD)
     fn = ops.round_away(y)
     n = ops.trunc_int(fn)
-    t = ops.mul(fn, k.pio2_hi)
+    i = (np.asarray(n, np.int64) & (form.table_n - 1)) * 2
+    t = ops.mul(fn, k.SINCOS_STEP_HI)
     r = ops.sub(x, t)
-    t = ops.mul(fn, k.pio2_lo)
+    t = ops.mul(fn, k.SINCOS_STEP_LO)
     r = ops.sub(r, t)
     r2 = ops.mul(r, r)
-    ps = ops.mul(_horner(ops, k.s, r2), r)  # (S3 + S5 r^2 + S7 r^4) r^2 r
+    ps = ops.mul(_horner(ops, [k[f"SIN_S{2 * j + 3}"] for j in range(form.sin_terms)], r2), r)
     sr = ops.add(r, ps)
-    cr = ops.add(ops.const(1.0), _horner(ops, k.c, r2))  # 1 + (C2 + C4 r^2 + C6 r^4 + C8 r^6) r^2
-    q = n & 3
-    quadrant = [q == 0, q == 1, q == 2]
-    s_out = ops.select(quadrant, [sr, cr, ops.neg(sr)], ops.neg(cr))
-    c_out = ops.select(quadrant, [cr, ops.neg(sr), ops.neg(cr)], sr)
+    cr = ops.add(ops.const(1.0), _horner(ops, [k[f"COS_C{2 * j + 2}"] for j in range(form.cos_terms)], r2))
+    sk, ck = tab[i], tab[i + 1]
+    s_out = ops.add(ops.mul(sk, cr), ops.mul(ck, sr))
+    c_out = ops.sub(ops.mul(ck, cr), ops.mul(sk, sr))
     return s_out, c_out
 
 
 def sincos_f32(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """sin and cos of float32 ``x``, the exact operation sequence of the C."""
-    return _sincos(FLOAT32.ops, x, sincos_coeffs())
+    """sin and cos of float32 ``x``, the exact operation sequence of the float32 C."""
+    from codegen.kernels.consts import Const, Constants, in_format
 
-
-def sincos_constants() -> list[tuple[str, float, str, str]]:
-    """(name, float64 value, unit, meaning) of every constant the generated sin/cos uses (the step's
-    number format rounds each once)."""
-    names = [
-        ("TWO_OVER_PI", "1/rad", "2/pi: quadrant of theta_e"),
-        ("PIO2_HI", "rad", "pi/2, high part (Cody-Waite)"),
-        ("PIO2_LO", "rad", "pi/2 - PIO2_HI"),
-        ("SIN_S3", "", "sin r = r + r^3 (S3 + r^2 (S5 + r^2 S7))"),
-        ("SIN_S5", "", "sin coefficient of r^5 (least squares on [0, pi/4])"),
-        ("SIN_S7", "", "sin coefficient of r^7"),
-        ("COS_C2", "", "cos r = 1 + r^2 (C2 + r^2 (C4 + r^2 (C6 + r^2 C8)))"),
-        ("COS_C4", "", "cos coefficient of r^4"),
-        ("COS_C6", "", "cos coefficient of r^6"),
-        ("COS_C8", "", "cos coefficient of r^8"),
-    ]
-    return [(n, v, u, d) for (n, u, d), v in zip(names, sincos_coeffs64())]
+    k = Constants(in_format(FLOAT32, (Const(*c) for c in sincos_constants(FLOAT32))))
+    return sincos(FLOAT32.ops, x, k, sincos_table(FLOAT32), FLOAT32.sincos_form)

@@ -98,6 +98,11 @@ class NumberFormat(Protocol):
         ...
 
     @property
+    def sincos_form(self) -> Any:
+        """The shape of the generated sin/cos (``trigform.SinCosForm``: table size, polynomial terms)."""
+        ...
+
+    @property
     def scaling(self) -> Any:
         """The step's Q formats (``scaling.Scaling``) of a fixed-point format; None for float32."""
         ...

@@ -31,6 +31,7 @@ import numpy as np
 
 from .lanes import LaneOps
 from .scaling import INT32_MAX, INT32_MIN, BaseRanges, Scaling, Signal, choose_scaling
+from .trigform import SinCosForm
 
 __all__ = ["FixedOps", "Fixed", "FIXED", "isqrt64"]
 
@@ -135,6 +136,8 @@ class Fixed:
     #: |theta_e| <= 8 rad (a wrapped angle, and its extrapolation by two periods): the angle is a
     #: dimensionless per-unit value, so a wide guard would cost every dimensionless signal its bits
     angle_guard_rad: float = 8.0
+    #: sin/cos: the quadrant (table of 4: y = theta 2/pi stays small) and a degree-7/8 polynomial
+    sincos_form: SinCosForm = SinCosForm(4, 3, 4)
     _ops: list = field(default_factory=list, compare=False, repr=False)
 
     def for_step(self, signals: list[Signal], base: BaseRanges, global_q: int | None) -> Fixed:

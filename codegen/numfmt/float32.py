@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from .lanes import LaneOps
+from .trigform import SinCosForm
 
 __all__ = ["F", "f32", "c_float_literal", "Float32Ops", "Float32", "FLOAT32"]
 
@@ -131,9 +132,11 @@ class Float32:
     ops: Float32Ops = field(default_factory=Float32Ops)
     scaling: Any = None
     quantised: bool = False
-    #: |theta_e| <= 256 rad: |n| <= 163 quadrants, inside the exact range |n| <= 512 of the sin/cos
-    #: range reduction (codegen.kernels.trig)
+    #: |theta_e| <= 256 rad: table index |n| <= 10 430 (codegen.kernels.trig: its Cody-Waite split
+    #: keeps fn STEP_HI exact to twice that)
     angle_guard_rad: float = 256.0
+    #: sin/cos: a 256-entry table and one polynomial term each (|r| <= pi/256)
+    sincos_form: SinCosForm = SinCosForm(256, 1, 1)
 
     def const(self, x: float, unit: str = "") -> np.float32:
         return self.real_dtype.type(x)  # type: ignore[no-any-return]

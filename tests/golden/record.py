@@ -24,6 +24,7 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent.parent
+sys.path.insert(0, str(ROOT))  # this checkout's codegen, not an installed copy
 CONFIGS = ("seed001_spmsm", "seed001_ipmsm", "seed000_tlevel")
 N_CLOSED, N_ADV, N_RANDOM = 1000, 1500, 1500
 #: keys left out of the comparison: timings, file paths, versions, and the config hash (it changes

@@ -25,7 +25,9 @@ from codegen.kernels.consts import Const, HasConsts, fault_action_constants, lea
 from codegen.kernels.consts import guard_limits as shared_guard_limits
 from codegen.kernels.dq import DqModel
 from codegen.kernels.stepformat import motor_ranges, step_format
+from codegen.kernels.trig import sincos_table
 from codegen.model import Model
+from codegen.numfmt import number_format
 from codegen.numfmt.scaling import Scaling, Signal
 from codegen.topologies.ttype import candidates as cd
 from codegen.topologies.ttype import vectors as v
@@ -39,6 +41,7 @@ class ThreeLevelTables(HasConsts):
     prefix: str
     strategy: str  # 'mpdtc27' | 'mpdtc63'
     consts: tuple[Const, ...]
+    sincos_tab: tuple[np.generic, ...]  # sin, cos at 2 pi k / N, interleaved (kernels.trig.sincos_table)
     # per state (27): neutral-point coefficients i_o = ka i_a + kb i_b + kc i_c
     #: midpoint-current pattern of each state: p = 4 ka + 2 kb + kc, i_o = ka i_a + kb i_b + kc i_c
     #: with (ka, kb, kc) in {0, 1}^3 (eq. (2) corrected); only the 8 values i_o(p) exist per step
@@ -112,7 +115,7 @@ def _constants(model: Model) -> list[Const]:
     m, c, inv = model.motor, model.controller, model.inverter
     ts = c.dt_s
     f = float
-    out = leading_constants(guard_limits(model))
+    out = leading_constants(guard_limits(model), number_format(model.controller.number_format))
     out += [
         Const("SQRT3_2", f(math.sqrt(3) / 2), "", "inverse Clarke: i_b = -i_alpha/2 + sqrt(3)/2 i_beta"),
         Const("HALF", f(0.5), "", "1/2"),
@@ -211,6 +214,7 @@ def derive_three_level(model: Model) -> ThreeLevelTables:
         prefix=model.prefix,
         strategy=strategy,
         consts=consts,
+        sincos_tab=sincos_table(nf),
         io_pattern=pat,
         seq_pat=tuple(tuple(pat[s] for s in sq[:4]) for sq in seq),
         ux=tuple(f(x) for x in ux),

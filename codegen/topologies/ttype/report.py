@@ -14,6 +14,7 @@ def table_bytes(t: ThreeLevelTables) -> dict[str, int]:
         "seq_pat (uint16)": len(t.seq_pat) * 4 * 2,
         "ux, uy (float)": 2 * n_vec * 4,
         "seq (uint16)": n_vec * 7 * 2,
+        "sincos_tab (real)": len(t.sincos_tab) * 4,
     }
     # groups are resolved by generated code: no group tables; 27-MPDTC's one row is unrolled too,
     # only its group count remains

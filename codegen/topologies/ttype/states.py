@@ -105,9 +105,9 @@ def adversarial_states(model: Model, t: ThreeLevelTables, n_target: int = 200_00
     _on_sector_border(model, x, rng)
     parts.append(x)
 
-    # angle-reduction borders: multiples of pi/4, +-0, one ulp either side
+    # sin/cos angle-reduction borders: multiples of pi/N, +-0, one ulp either side
     x = _nominal(model, n_target // 10, rng)
-    x["theta_e_rad"] = common.angle_reduction_borders(len(x), g["ANGLE_GUARD_RAD"], rng)
+    x["theta_e_rad"] = common.angle_reduction_borders(len(x), g["ANGLE_GUARD_RAD"], t.nf.sincos_form.table_n, rng)
     parts.append(x)
 
     # ties: zero currents (all i_o = 0: redundant members tie), zero speed,

@@ -17,7 +17,9 @@ from codegen.kernels.consts import Const, HasConsts, fault_action_constants, lea
 from codegen.kernels.consts import guard_limits as shared_guard_limits
 from codegen.kernels.dq import DqModel
 from codegen.kernels.stepformat import motor_ranges, step_format
+from codegen.kernels.trig import sincos_table
 from codegen.model import Model
+from codegen.numfmt import number_format
 from codegen.numfmt.scaling import Scaling, Signal
 from codegen.topologies.twolevel import mtpa, vectors
 
@@ -34,6 +36,7 @@ class TwoLevelTables(HasConsts):
     predictor: str
     delay_compensation: bool
     consts: tuple[Const, ...]
+    sincos_tab: tuple[np.generic, ...]  # sin, cos at 2 pi k / N, interleaved (kernels.trig.sincos_table)
     ux: tuple[np.generic, ...]  # unit vector alpha components, V0..V6
     uy: tuple[np.generic, ...]
     vec_to_sw: tuple[int, ...]
@@ -80,7 +83,7 @@ def _constants(model: Model) -> list[Const]:
     """The step's constants, float64 (``in_format`` rounds them to the step's format)."""
     m, c = model.motor, model.controller
     f = float
-    out = leading_constants(guard_limits(model))
+    out = leading_constants(guard_limits(model), number_format(model.controller.number_format))
     out += [
         Const("LD_H", f(m.ld_h), "H", "psi_d = Ld i_d + psi_f"),
         Const("LQ_H", f(m.lq_h), "H", "psi_q = Lq i_q"),
@@ -224,6 +227,7 @@ def derive_two_level(model: Model, switch_table: SwitchTable | None = None) -> T
         predictor=c.predictor,
         delay_compensation=c.delay_compensation,
         consts=consts,
+        sincos_tab=sincos_table(nf),
         ux=tuple(nf.const(v) for v in ux),
         uy=tuple(nf.const(v) for v in uy),
         vec_to_sw=vectors.VEC_TO_SW,

@@ -14,14 +14,15 @@ from __future__ import annotations
 from typing import Any
 
 from codegen.kernels.guard import GUARD_FP
-from codegen.kernels.trig import SINCOS_FP, SINCOS_LOADS
+from codegen.kernels.trig import sincos_ops
 
 
 def essential_ops(tables: Any) -> dict[str, dict[str, int]]:
     """``{"per_step": counts, "per_candidate": counts, "per_member": counts}``, counts with keys
     ``fp``, ``sqrt``, ``div``, ``load``, ``store``."""
+    sincos_fp, sincos_loads = sincos_ops(tables.nf)  # one generated sin/cos in the step's format
     geo = tables.predictor == "flux-geometry"
-    fp = GUARD_FP + SINCOS_FP + 3 + 6 + 3  # guard, sin/cos, Clarke, Park, dq flux
+    fp = GUARD_FP + sincos_fp + 3 + 6 + 3  # guard, sin/cos, Clarke, Park, dq flux
     if geo:
         fp += 6 + 2 + 1 + 4 + 3  # inverse Park, psi_f (cos, sin), U_dc dt, torque, |psi|^2
         fp += 4 if tables.delay_compensation else 0
@@ -39,7 +40,7 @@ def essential_ops(tables: Any) -> dict[str, dict[str, int]]:
         per_cand_fp = 4 + 4 + 3 + cost_fp  # flux predictor, torque, |psi|^2
     else:
         per_cand_fp = 9 + 3 + 4 + 3 + cost_fp  # Euler current step, flux, torque, |psi|^2
-    n_const = 14 + SINCOS_LOADS
+    n_const = 14 + sincos_loads
     ops = {
         "per_step": {"fp": fp, "sqrt": 1, "div": 0, "load": 6 + n_const + 1, "store": 14},
         "per_candidate": {"fp": per_cand_fp, "sqrt": 1, "div": 0, "load": 3, "store": 2},

@@ -71,7 +71,7 @@ def _step(t: TwoLevelTables, x: np.ndarray) -> np.ndarray:
     ia, ib, th, om = inp["ia_a"], inp["ib_a"], inp["theta_e_rad"], inp["omega_e_rad_s"]
     udc, tref, prev_sw = inp["udc_v"], inp["torque_ref_nm"], inp["prev_sw"]
 
-    s, c = sincos(o, th, k)
+    s, c = sincos(o, th, k, t.sincos_tab, t.nf.sincos_form)
     i_alpha, i_beta = frames.clarke(o, ia, ib, k.INV_SQRT3)
     i_d, i_q = frames.park(o, i_alpha, i_beta, s, c)
     model = DQ.resolve(k)

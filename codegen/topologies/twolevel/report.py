@@ -20,6 +20,7 @@ def table_bytes(t: TwoLevelTables) -> dict[str, int]:
         "vec_to_sw, zero_sw (uint16)": (N_VECTORS + 8) * 2,
         "sw_to_vec (uint16)": 8 * 2 if t.delay_compensation else 0,
         "candidate rows (uint16)": len(t.rows) * (N_VECTORS + 1) * 2,
+        "sincos_tab (real)": len(t.sincos_tab) * 4,
     }
     if t.psi_tab:
         out["psi_tab, psi_slope (MTPA psi*, real)"] = (len(t.psi_tab) + len(t.psi_slope)) * 4

@@ -99,9 +99,9 @@ def adversarial_states(model: Model, t: TwoLevelTables, reference_step: StepBatc
     place_flux_on_border(model, x, 0.1, rng)
     parts.append(x)
 
-    # angle-reduction borders: multiples of pi/4 and pi/2, +-0, one ulp either side
+    # sin/cos angle-reduction borders: multiples of pi/N, +-0, one ulp either side
     x = base(n_target // 10)
-    x["theta_e_rad"] = common.angle_reduction_borders(len(x), g["ANGLE_GUARD_RAD"], rng)
+    x["theta_e_rad"] = common.angle_reduction_borders(len(x), g["ANGLE_GUARD_RAD"], t.nf.sincos_form.table_n, rng)
     parts.append(x)
 
     # T* exactly at the threshold and one ulp either side (s1-s3 decision border)
