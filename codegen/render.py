@@ -17,9 +17,9 @@ import jinja2
 
 from codegen import __version__
 from codegen.kernels.consts import Const
-from codegen.kernels.trig import cos_names, sin_names, table_index_bound
+from codegen.kernels.trig import cos_names, horner_order, poly_text, sin_names, table_index_bound
 from codegen.model import Model
-from codegen.numfmt import number_format
+from codegen.numfmt import NumberFormat, number_format
 from codegen.numfmt.float32 import FLOAT32
 from codegen.records import REAL, Record
 from codegen.resources import templates_dir
@@ -110,11 +110,22 @@ def render_files(templates: dict[str, str], ctx: dict) -> dict[str, str]:
     return {name: env.get_template(tpl).render(ctx) for name, tpl in templates.items()}
 
 
-def sincos_bound(model: Model, angle_max_rad: float, what: str) -> str:
-    """The comment on the sin/cos table index: the largest |n| = round(|x| N/(2 pi)) for |x| up to
-    ``angle_max_rad`` (``what`` says where that bound comes from)."""
-    nf = number_format(model.controller.number_format)
-    return f"|n| <= {table_index_bound(nf, angle_max_rad)}: |x| <= {what} = {angle_max_rad:.6g} rad"
+def sincos_bound(nf: NumberFormat, what: str, extra_rad: float = 0.0) -> str:
+    """The comment on the sin/cos table index: the largest |n| = round(|x| N/(2 pi)) for |x| up to the
+    format's angle guard plus ``extra_rad`` (``what`` says where that bound comes from)."""
+    x = nf.angle_guard_rad + extra_rad
+    return f"|n| <= {table_index_bound(nf, x)}: |x| <= {what} = {x:.6g} rad"
+
+
+def sincos_context(nf: NumberFormat) -> dict[str, object]:
+    """What the sin/cos macros print (``templates/common/kernels.j2``): the table size and index mask,
+    the coefficient names in Horner order (``trig.horner_order``) and the polynomials as text."""
+    form = nf.sincos_form
+    sin_lead, sin_rest = horner_order(sin_names(form))
+    cos_lead, cos_rest = horner_order(cos_names(form))
+    sin_poly, cos_poly = poly_text(form)
+    return {"sincos_n": form.table_n, "sincos_mask": form.table_n - 1, "sin_lead": sin_lead, "sin_rest": sin_rest,
+            "cos_lead": cos_lead, "cos_rest": cos_rest, "sin_poly": sin_poly, "cos_poly": cos_poly}
 
 
 def step_context(model: Model, target: str, records: tuple[Record, Record],
@@ -135,9 +146,7 @@ def step_context(model: Model, target: str, records: tuple[Record, Record],
         "guard_bits": {name: bits for name, bits in guard_bits.items() if bits is not None},
         "dt_s": model.controller.dt_s,
         "angle_guard_rad": nf.angle_guard_rad,
-        "sincos_n": nf.sincos_form.table_n,
-        "sin_coeffs": sin_names(nf),
-        "cos_coeffs": cos_names(nf),
+        **sincos_context(nf),
         "input_fields": records[0].bind(nf).members,
         "output_fields": records[1].bind(nf).members,
         **values,

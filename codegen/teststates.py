@@ -99,9 +99,10 @@ def random_torque_ref(n: int, g: Mapping[str, float], rng: np.random.Generator) 
 def angle_reduction_borders(n: int, angle_guard: float, table_n: int, rng: np.random.Generator) -> np.ndarray:
     """``n`` float32 angles on the borders of the sin/cos angle reduction of a ``table_n``-entry
     table (codegen.kernels.trig): multiples of pi/table_n (its table points and the rounding borders
-    halfway between them, over +-80 pi rad, 40 turns), one float32 step either side of them, and
-    first 0, -0 and the guard limit of either sign."""
-    k = rng.integers(-80 * table_n, 80 * table_n + 1, n)
+    halfway between them) within the guard, one float32 step either side of them, and first 0, -0
+    and the guard limit of either sign."""
+    k_max = math.floor(angle_guard * table_n / math.pi)
+    k = rng.integers(-k_max, k_max + 1, n)
     th = (k * (math.pi / table_n)).astype(np.float32)
     th = np.where(rng.random(n) < 0.5, np.nextafter(th, F(np.inf)), th)
     th = np.where(rng.random(n) < 0.3, np.nextafter(th, F(-np.inf)), th)

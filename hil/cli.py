@@ -40,7 +40,6 @@ def cmd_hil(args: argparse.Namespace) -> int:
     from .link import open_link
     from .qemu import QEMU_BOARD
     from .qemu import TIMEOUT_S as QEMU_TIMEOUT_S
-    from .qemu import WINDOW_OCTETS as QEMU_WINDOW_OCTETS
     from .replay import replay
     from .schema import Schema
     from .session import Session
@@ -97,9 +96,8 @@ def cmd_hil(args: argparse.Namespace) -> int:
                           "schema_hash": schema.schema_hash, "strategy": model.controller.strategy,
                           "board": args.port or args.board or VIRTUAL, "mode": args.mode}
                 link = LoggingLink(board_link, stack.enter_context(open(log_path, "w")), header)
-            # the emulated board: a long timeout and a small window (QEMU's slow UART input); else the defaults
-            kw: dict[str, Any] = ({"timeout_s": QEMU_TIMEOUT_S, "window_octets": QEMU_WINDOW_OCTETS}
-                                  if args.board == QEMU_BOARD else {})
+            # the emulated board: a long timeout (QEMU's slow UART input); else the defaults
+            kw: dict[str, Any] = {"timeout_s": QEMU_TIMEOUT_S} if args.board == QEMU_BOARD else {}
             if args.timeout is not None:
                 kw["timeout_s"] = args.timeout
             session = Session(link, schema, retries=args.retries, batch=args.batch, **kw)

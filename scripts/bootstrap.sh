@@ -13,6 +13,8 @@ command -v "$PY" >/dev/null 2>&1 || need_apt+=(python3)
 "$PY" -c 'import os, sys, sysconfig; sys.exit(not os.path.exists(os.path.join(sysconfig.get_paths()["include"], "Python.h")))' \
   >/dev/null 2>&1 || need_apt+=(python3-dev)
 command -v make >/dev/null 2>&1 || need_apt+=(make)
+# git: the packaging and docs tests list the tracked files (git ls-files)
+command -v git >/dev/null 2>&1 || need_apt+=(git)
 command -v arm-none-eabi-gcc >/dev/null 2>&1 || need_apt+=(gcc-arm-none-eabi)
 [ -e /usr/lib/arm-none-eabi/newlib/libc.a ] || [ -e /usr/lib/arm-none-eabi/lib/libc.a ] || need_apt+=(libnewlib-arm-none-eabi)
 command -v qemu-system-arm >/dev/null 2>&1 || need_apt+=(qemu-system-arm)

@@ -1,6 +1,9 @@
 """The generated sin/cos: accuracy (a property) and determinism of the constants."""
+from pathlib import Path
+
 import numpy as np
 
+from codegen.config import load_config
 from codegen.kernels.trig import (
     ANGLE_GUARD_RAD,
     cos_names,
@@ -13,6 +16,9 @@ from codegen.kernels.trig import (
 )
 from codegen.numfmt.fixed import FIXED
 from codegen.numfmt.float32 import FLOAT32, c_float_literal, f32
+from codegen.topology import topology_of
+
+EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 
 
 def test_accuracy_over_guard_range():
@@ -47,19 +53,29 @@ def test_step_split_keeps_fn_hi_exact():
 
 
 def test_table_and_coefficients_per_format():
-    """float32: 256 entries and one term each; fixed point: the quadrant table (0, +-1 exactly) and
-    the degree-7/8 polynomial."""
+    """float32: 256 entries and one term each; fixed point: the quadrant (4 entries, the next test)
+    and the degree-7/8 polynomial."""
     tab = sincos_table(FLOAT32)
     assert len(tab) == 512 and all(isinstance(v, np.float32) for v in tab)
     assert (tab[0], tab[1]) == (0.0, 1.0)
-    assert (sin_names(FLOAT32), cos_names(FLOAT32)) == (["SIN_S3"], ["COS_C2"])
-    assert (sin_names(FIXED), cos_names(FIXED)) == (["SIN_S3", "SIN_S5", "SIN_S7"], ["COS_C2", "COS_C4", "COS_C6", "COS_C8"])
+    assert (sin_names(FLOAT32.sincos_form), cos_names(FLOAT32.sincos_form)) == (["SIN_S3"], ["COS_C2"])
+    assert (sin_names(FIXED.sincos_form), cos_names(FIXED.sincos_form)) == (["SIN_S3", "SIN_S5", "SIN_S7"], ["COS_C2", "COS_C4", "COS_C6", "COS_C8"])
     assert table_index_bound(FIXED) == 5  # 8 rad * 4 / (2 pi)
     k = {name: v for name, v, *_ in sincos_constants(FLOAT32)}
     assert abs(k["SIN_S3"] + 1 / 6) < 1e-5 and abs(k["COS_C2"] + 0.5) < 1e-5  # near Taylor: least squares
-    # essential operations of one sin/cos (the cycle bound): 19 float operations and 7 loads in float32
-    assert sincos_ops(FLOAT32) == (19, 7)
-    assert sincos_ops(FIXED) == (29, 12)
+    # essential operations of one sin/cos (the cycle bound): 19 float operations and 5 constant loads in
+    # float32 (plus the 2 table loads of each angle)
+    assert sincos_ops(FLOAT32) == (19, 5)
+    assert sincos_ops(FIXED) == (29, 10)
+
+
+def test_fixed_point_quadrant_table_is_exact():
+    """The fixed-point table (a derived step's, in its Q format): sin and cos of 0, pi/2, pi, 3 pi/2
+    are exactly 0 and +-1, so the angle sum is the quadrant swap and sign change, exactly."""
+    m = load_config(EXAMPLES / "seed001_spmsm.toml").with_controller(number_format="fixed")
+    t = topology_of(m).derive(m)
+    one = int(t.nf.const(1.0, ""))
+    assert [int(v) for v in t.sincos_tab] == [0, one, one, 0, 0, -one, -one, 0]
 
 
 def test_hex_literals_round_trip():

@@ -22,7 +22,7 @@ from collections.abc import Iterable
 
 from codegen.errors import ConfigError
 from codegen.kernels.consts import Const, guard_limits, in_format
-from codegen.kernels.trig import is_sincos_constant
+from codegen.kernels.trig import sincos_constants
 from codegen.model import Model
 from codegen.numfmt import NumberFormat, number_format
 from codegen.numfmt.scaling import BaseRanges, RepresentationError, Signal
@@ -78,8 +78,10 @@ def step_format(model: Model, consts: Iterable[Const], extra: Iterable[Signal] =
     consts = list(consts)
     c = model.controller
     base, sigs = motor_ranges(model)
+    # the sin/cos constants' precision is the approximation's (a tested property), not checked per constant
+    approximation = {name for name, *_ in sincos_constants(number_format(c.number_format))}
     sigs += [Signal(k.name, k.unit, abs(float(k.value)), CONST_FIELDS.get(k.name, "controller.number_format"),
-                    exact=not is_sincos_constant(k.name)) for k in consts]
+                    exact=k.name not in approximation) for k in consts]
     sigs += list(extra)
     try:
         nf = number_format(c.number_format).for_step(sigs, base, c.fixed_q)

@@ -57,8 +57,8 @@ def _split_step(nf: NumberFormat) -> tuple[float, float]:
 
 
 def _fit(func: Any, powers: list[int], r_max: float) -> np.ndarray:
-    """Least-squares fit on Chebyshev nodes of [0, r_max] (close to minimax), float64: func(r) - its
-    lead term (r for sin, 1 for cos) as sum(c_k r^k) over ``powers``."""
+    """Least-squares fit on Chebyshev nodes of [0, r_max] (close to minimax), float64: func(r) as
+    sum(c_k r^k) over ``powers`` (the callers pass sin r - r and cos r - 1)."""
     k = np.arange(4000)
     r = (r_max / 2) * (1 - np.cos((k + 0.5) * np.pi / len(k)))
     r = r[r > 0]
@@ -75,19 +75,36 @@ def _coeffs64(table_n: int, sin_terms: int, cos_terms: int) -> tuple[tuple[float
     return tuple(float(v) for v in s), tuple(float(v) for v in c)
 
 
-def sin_names(nf: NumberFormat) -> list[str]:
+def sin_names(form: SinCosForm) -> list[str]:
     """Names of the sin coefficients, lowest power first (SIN_S3, SIN_S5, ...)."""
-    return [f"SIN_S{2 * i + 3}" for i in range(nf.sincos_form.sin_terms)]
+    return [f"SIN_S{2 * i + 3}" for i in range(form.sin_terms)]
 
 
-def cos_names(nf: NumberFormat) -> list[str]:
+def cos_names(form: SinCosForm) -> list[str]:
     """Names of the cos coefficients, lowest power first (COS_C2, COS_C4, ...)."""
-    return [f"COS_C{2 * i + 2}" for i in range(nf.sincos_form.cos_terms)]
+    return [f"COS_C{2 * i + 2}" for i in range(form.cos_terms)]
 
 
-def is_sincos_constant(name: str) -> bool:
-    """True for a constant of the generated sin/cos (its precision is the approximation's, tested)."""
-    return name.startswith(("SINCOS_", "SIN_S", "COS_C"))
+def _nested(names: list[str]) -> str:
+    """Horner text of coefficients ``names`` (lowest power first) in r^2: S3 + r^2 (S5 + r^2 S7)."""
+    if len(names) == 1:
+        return names[0]
+    rest = _nested(names[1:])
+    return f"{names[0]} + r^2 " + (rest if len(names) == 2 else f"({rest})")
+
+
+def poly_text(form: SinCosForm) -> tuple[str, str]:
+    """The polynomials of ``form`` as comments print them: sin r = r + r^3 (...), cos r = 1 + r^2 (...)."""
+    s = _nested([n[4:] for n in sin_names(form)])
+    c = _nested([n[4:] for n in cos_names(form)])
+    paren = lambda t: t if " " not in t else f"({t})"  # noqa: E731
+    return f"sin r = r + r^3 {paren(s)}", f"cos r = 1 + r^2 {paren(c)}"
+
+
+def horner_order(coeffs: Any) -> tuple[Any, list[Any]]:
+    """(leading coefficient, the others in the order Horner adds them) of ``coeffs`` (lowest power
+    first): the C's and the reference's polynomial order."""
+    return coeffs[-1], list(reversed(coeffs[:-1]))
 
 
 def sincos_constants(nf: NumberFormat) -> list[tuple[str, float, str, str]]:
@@ -101,10 +118,9 @@ def sincos_constants(nf: NumberFormat) -> list[tuple[str, float, str, str]]:
         ("SINCOS_STEP_HI", hi, "rad", "2 pi/N, high part (Cody-Waite: fn STEP_HI exact)"),
         ("SINCOS_STEP_LO", lo, "rad", "2 pi/N - SINCOS_STEP_HI"),
     ]
-    out += [(n, v, "", f"sin r = r + r^3 (S3 + r^2 (S5 + ...)): r^{n[5:]} (least squares on [0, pi/N])")
-            for n, v in zip(sin_names(nf), s)]
-    out += [(n, v, "", f"cos r = 1 + r^2 (C2 + r^2 (C4 + ...)): r^{n[5:]} (least squares on [0, pi/N])")
-            for n, v in zip(cos_names(nf), c)]
+    sin_t, cos_t = poly_text(f)
+    out += [(n, v, "", f"{sin_t}: r^{n[5:]} (least squares on [0, pi/N])") for n, v in zip(sin_names(f), s)]
+    out += [(n, v, "", f"{cos_t}: r^{n[5:]} (least squares on [0, pi/N])") for n, v in zip(cos_names(f), c)]
     return out
 
 
@@ -117,22 +133,24 @@ def sincos_table(nf: NumberFormat) -> tuple[Any, ...]:
 
 #: essential operations of one generated sin/cos besides its polynomials, for the cycle bound
 #: (``Topology.essential_ops``): y, round, convert, Cody-Waite (4), r^2, 1 + ..., r + ..., the angle
-#: sum (6); loads: 3 constants and the two table values
-_SINCOS_FP_BASE, _SINCOS_LOADS_BASE = 16, 5
+#: sum (6); loads: 3 constants besides the coefficients, and the two table values
+_SINCOS_FP_BASE, _SINCOS_CONST_LOADS, SINCOS_TABLE_LOADS = 16, 3, 2
 
 
 def sincos_ops(nf: NumberFormat) -> tuple[int, int]:
-    """(float operations, loads) of one generated sin/cos in format ``nf`` (the cycle bound)."""
+    """(float operations, constant loads) of one generated sin/cos in format ``nf`` (the cycle bound);
+    each angle adds ``SINCOS_TABLE_LOADS`` table loads, while angles of one step share the constants."""
     f = nf.sincos_form
-    poly = 2 * f.sin_terms + 2 * f.cos_terms - 1  # Horner (mul, add per extra term) and x r for sin
-    return _SINCOS_FP_BASE + poly, _SINCOS_LOADS_BASE + f.sin_terms + f.cos_terms
+    poly = 2 * f.sin_terms + 2 * f.cos_terms - 1  # Horner (n multiplies, n - 1 adds each) and x r for sin
+    return _SINCOS_FP_BASE + poly, _SINCOS_CONST_LOADS + f.sin_terms + f.cos_terms
 
 
 def _horner(ops: Ops, coeffs: Any, x: Any) -> Any:
     """(((c_n x + c_{n-1}) x + ...) + c_0) x, lowest coefficient first in ``coeffs``: the operation
-    order of the C polynomials (one multiply and one add per coefficient)."""
-    p = ops.mul(coeffs[-1], x)
-    for c in reversed(coeffs[:-1]):
+    order of the C polynomials (``horner_order``: n multiplies and n - 1 adds)."""
+    lead, rest = horner_order(coeffs)
+    p = ops.mul(lead, x)
+    for c in rest:
         p = ops.add(p, c)
         p = ops.mul(p, x)
     return p
@@ -155,18 +173,24 @@ def sincos(ops: Ops, x: Any, consts: Any, table: Any, form: SinCosForm) -> tuple
     t = ops.mul(fn, k.SINCOS_STEP_LO)
     r = ops.sub(r, t)
     r2 = ops.mul(r, r)
-    ps = ops.mul(_horner(ops, [k[f"SIN_S{2 * j + 3}"] for j in range(form.sin_terms)], r2), r)
+    ps = ops.mul(_horner(ops, [k[name] for name in sin_names(form)], r2), r)
     sr = ops.add(r, ps)
-    cr = ops.add(ops.const(1.0), _horner(ops, [k[f"COS_C{2 * j + 2}"] for j in range(form.cos_terms)], r2))
+    cr = ops.add(ops.const(1.0), _horner(ops, [k[name] for name in cos_names(form)], r2))
     sk, ck = tab[i], tab[i + 1]
     s_out = ops.add(ops.mul(sk, cr), ops.mul(ck, sr))
     c_out = ops.sub(ops.mul(ck, cr), ops.mul(sk, sr))
     return s_out, c_out
 
 
-def sincos_f32(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """sin and cos of float32 ``x``, the exact operation sequence of the float32 C."""
+@cache
+def _f32_parts() -> tuple[Any, tuple[Any, ...]]:
     from codegen.kernels.consts import Const, Constants, in_format
 
-    k = Constants(in_format(FLOAT32, (Const(*c) for c in sincos_constants(FLOAT32))))
-    return sincos(FLOAT32.ops, x, k, sincos_table(FLOAT32), FLOAT32.sincos_form)
+    return Constants(in_format(FLOAT32, (Const(*c) for c in sincos_constants(FLOAT32)))), sincos_table(FLOAT32)
+
+
+def sincos_f32(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """sin and cos of float32 ``x``, the exact operation sequence of the float32 C (constants and
+    table rounded once, on the first call)."""
+    k, table = _f32_parts()
+    return sincos(FLOAT32.ops, x, k, table, FLOAT32.sincos_form)

@@ -3,7 +3,6 @@
  */
 #include "hil_wire.h"
 
-
 void hil_put_u16(uint16_t *o, uint16_t value)
 {
     o[0] = (uint16_t)(value & 0xFFu);

@@ -60,5 +60,6 @@ def test_emulated_bench_fixed_point_beside_float32(tmp_path, capsys):
         assert e["m7_instructions_per_step_float32"] > 50
         by = e["m7_by_number_format"]
         assert by["fixed"]["states_checked"] == 1000 + N_BENCH  # every one bit-exact, or bench raises
+        assert by["float32"]["states_checked"] == 1000 + N_BENCH
     out = capsys.readouterr().out
     assert "fixed" in out and "float32" in out

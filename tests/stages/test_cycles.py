@@ -10,8 +10,11 @@ import pytest
 
 from codegen.stages import cycles
 
+from conftest import require_tool
+
 # llvm-mca and arm-none-eabi-gcc are not optional: scripts/bootstrap.sh installs them, and a missing
-# tool fails these tests (cycles.CycleError names the Debian package) instead of skipping them.
+# tool fails these tests (cycles.CycleError or require_tool names the Debian package) instead of
+# skipping them.
 
 
 @pytest.mark.parametrize("n", [4, 16])
@@ -99,6 +102,7 @@ void _start(void) { for (;;) {} }
 
 
 def test_trace_a_small_function(tmp_path: Path):
+    require_tool("arm-none-eabi-gcc", "gcc-arm-none-eabi")
     src = tmp_path / "f.c"
     src.write_text(SOURCE)
     elf = tmp_path / "f.elf"

@@ -12,13 +12,13 @@ from __future__ import annotations
 from typing import Any
 
 from codegen.kernels.guard import GUARD_FP
-from codegen.kernels.trig import sincos_ops
+from codegen.kernels.trig import SINCOS_TABLE_LOADS, sincos_ops
 
 
 def essential_ops(tables: Any) -> dict[str, dict[str, int]]:
     """``{"per_step": counts, "per_candidate": counts, "per_member": counts}``, counts with keys
     ``fp``, ``sqrt``, ``div``, ``load``, ``store``."""
-    sincos_fp, sincos_loads = sincos_ops(tables.nf)  # one generated sin/cos in the step's format
+    sincos_fp, sincos_consts = sincos_ops(tables.nf)  # one generated sin/cos in the step's format
     basic_only = tables.n_sectors == 1  # 27-MPDTC
     fp = GUARD_FP + 3 + 3 * sincos_fp  # guard, theta(k+1), theta(k+2), three sin/cos
     fp += 3 + 6 + 1 + 2 + 6 + 8  # Clarke, Park, i_c, V cos/sin, Euler bases, Euler step (delay)
@@ -31,7 +31,7 @@ def essential_ops(tables: Any) -> dict[str, dict[str, int]]:
         fp += 8 * 4  # |V_o(k+2)| per charge pattern
     per_member_fp = 1 if basic_only else 4  # compare (27) / charge, V_o(k+2), |.|, compare (63)
     return {
-        "per_step": {"fp": fp, "sqrt": 2, "div": 0, "load": 6 + 30 + 3 * sincos_loads, "store": 20},
+        "per_step": {"fp": fp, "sqrt": 2, "div": 0, "load": 6 + 30 + sincos_consts + 3 * SINCOS_TABLE_LOADS, "store": 20},
         "per_candidate": {"fp": 8 + 3 + 1 + 3 + 8 + 1, "sqrt": 1, "div": 0, "load": 4, "store": 2},
         "per_member": {"fp": per_member_fp, "sqrt": 0, "div": 0, "load": 2, "store": 0},
     }

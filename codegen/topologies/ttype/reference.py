@@ -139,9 +139,10 @@ def _step(t: ThreeLevelTables, x: np.ndarray) -> np.ndarray:
     tk = o.mul(om, k.TS_S)
     th1 = o.add(th, tk)
     th2 = o.add(th1, tk)
-    s0, c0 = sincos(o, th, k, t.sincos_tab, t.nf.sincos_form)
-    s1, c1 = sincos(o, th1, k, t.sincos_tab, t.nf.sincos_form)
-    s2, c2 = sincos(o, th2, k, t.sincos_tab, t.nf.sincos_form)
+    form = f.nf.sincos_form
+    s0, c0 = sincos(o, th, k, t.sincos_tab, form)
+    s1, c1 = sincos(o, th1, k, t.sincos_tab, form)
+    s2, c2 = sincos(o, th2, k, t.sincos_tab, form)
     # Clarke, Park with theta(k)
     i_alpha, i_beta = frames.clarke(o, ia, ib, k.INV_SQRT3)
     i_d, i_q = frames.park(o, i_alpha, i_beta, s0, c0)

@@ -66,9 +66,9 @@ def three_level_context(model: Model, t: ThreeLevelTables, target: str) -> dict:
         "rows": rows, "row_n": t.row_n, "max_groups": mg, "min_groups": min(t.row_n),
         "n_segments": N_SEGMENTS,
         "n_max_eval": N_MAX_EVAL, "safe_state": SAFE_STATE, "output_last": OUTPUT.fields[-1].name,
-        "sincos_bound": sincos_bound(model, float(t.nf.decode("rad", t.const("ANGLE_GUARD_RAD")))
-                                     + 2.0 * float(t.nf.decode("rad/s", t.const("OMEGA_GUARD_RAD_S")))
-                                     * float(t.nf.decode("s", t.const("TS_S"))), "ANGLE_GUARD_RAD + 2 w Ts")})
+        "sincos_bound": sincos_bound(t.nf, "ANGLE_GUARD_RAD + 2 w Ts",
+                                     2.0 * float(t.nf.decode("rad/s", t.const("OMEGA_GUARD_RAD_S")))
+                                     * float(t.nf.decode("s", t.const("TS_S"))))})
 
 
 def render_three_level(model: Model, tables: ThreeLevelTables, target: str) -> dict[str, str]:

@@ -14,13 +14,13 @@ from __future__ import annotations
 from typing import Any
 
 from codegen.kernels.guard import GUARD_FP
-from codegen.kernels.trig import sincos_ops
+from codegen.kernels.trig import SINCOS_TABLE_LOADS, sincos_ops
 
 
 def essential_ops(tables: Any) -> dict[str, dict[str, int]]:
     """``{"per_step": counts, "per_candidate": counts, "per_member": counts}``, counts with keys
     ``fp``, ``sqrt``, ``div``, ``load``, ``store``."""
-    sincos_fp, sincos_loads = sincos_ops(tables.nf)  # one generated sin/cos in the step's format
+    sincos_fp, sincos_consts = sincos_ops(tables.nf)  # one generated sin/cos in the step's format
     geo = tables.predictor == "flux-geometry"
     fp = GUARD_FP + sincos_fp + 3 + 6 + 3  # guard, sin/cos, Clarke, Park, dq flux
     if geo:
@@ -40,7 +40,7 @@ def essential_ops(tables: Any) -> dict[str, dict[str, int]]:
         per_cand_fp = 4 + 4 + 3 + cost_fp  # flux predictor, torque, |psi|^2
     else:
         per_cand_fp = 9 + 3 + 4 + 3 + cost_fp  # Euler current step, flux, torque, |psi|^2
-    n_const = 14 + sincos_loads
+    n_const = 14 + sincos_consts + SINCOS_TABLE_LOADS
     ops = {
         "per_step": {"fp": fp, "sqrt": 1, "div": 0, "load": 6 + n_const + 1, "store": 14},
         "per_candidate": {"fp": per_cand_fp, "sqrt": 1, "div": 0, "load": 3, "store": 2},

@@ -28,7 +28,7 @@ def two_level_context(model: Model, t: TwoLevelTables, target: str) -> dict:
         "rows_padded": rows, "row_len": t.row_len,
         "max_row_len": max(t.row_len), "min_row_len": min(t.row_len), "n_vectors": N_VECTORS,
         "v0_first": t.v0_first,
-        "sincos_bound": sincos_bound(model, float(t.nf.decode("rad", t.const("ANGLE_GUARD_RAD"))), "ANGLE_GUARD_RAD")})
+        "sincos_bound": sincos_bound(t.nf, "ANGLE_GUARD_RAD")})
 
 
 def render_two_level(model: Model, t: TwoLevelTables, target: str) -> dict[str, str]:
