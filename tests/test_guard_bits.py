@@ -1,7 +1,7 @@
 """The float32 guard compares bit patterns (a fast path for all checks at once, then the exact checks);
 the reference compares values: the same faults for every input (limits exactly, one ulp either side,
-signed zeros, infinities, NaNs of either sign and any payload, subnormals), and the generated sin/cos
-quadrant rounding is C99's roundf."""
+signed zeros, infinities, NaNs of either sign with three payloads each, subnormals), and the generated sin/cos
+table-index rounding is C99's roundf."""
 from __future__ import annotations
 
 import ctypes

@@ -16,6 +16,7 @@ from codegen.kernels.trig import (
 )
 from codegen.numfmt.fixed import FIXED
 from codegen.numfmt.float32 import FLOAT32, c_float_literal, f32
+from codegen.teststates import angle_reduction_borders
 from codegen.topology import topology_of
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
@@ -26,7 +27,8 @@ def test_accuracy_over_guard_range():
     x = np.concatenate([
         rng.uniform(-ANGLE_GUARD_RAD, ANGLE_GUARD_RAD, 1_000_000),
         np.linspace(0, 2 * np.pi, 200_001),
-        np.arange(-326, 327) * (np.pi / 4),
+        np.arange(-326, 327) * (np.pi / 4),  # the fixed-point reduction's borders (N = 4)
+        angle_reduction_borders(200_000, ANGLE_GUARD_RAD, FLOAT32.sincos_form.table_n, rng),  # float32's
     ]).astype(np.float32)
     s, c = sincos_f32(x)
     xd = x.astype(np.float64)

@@ -23,10 +23,12 @@ from codegen.numfmt import Ops
 __all__ = ["GUARD_FP", "COMMON_FAULTS", "COMMON_FAULT_DOCS", "PhaseCurrents", "AllAtLeast", "AllAtMost", "AbsAtMost",
            "IndexAtMost", "RealInRangeWhen", "Check", "fault_bits", "motor_checks", "evaluate", "gates_off"]
 
-#: essential operations of the common checks, for the cycle bound (``Topology.essential_ops``): one
-#: compare per check (|i_a|, |i_b|, |i_c|, |theta|, |omega|, |T*|, the DC-link low and high limits, the
-#: state index: 9), the sum i_a + i_b that gives |i_c|, and the one branch on their union; the absolute
-#: values are sign masks inside the compares (float32 compares bit patterns), not counted
+#: essential operations of a guard, for the cycle bound (``Topology.essential_ops``): one compare per
+#: check of the two-level guard (|i_a|, |i_b|, |i_c|, |theta|, |omega|, |T*|, the DC-link low and high
+#: limits, the state index: 9), the sum i_a + i_b that gives |i_c|, and the one branch on their union;
+#: the absolute values are sign masks inside the compares (float32 compares bit patterns), not counted.
+#: The T-type guard's further checks (the second capacitor's two limits, T_N of a virtual previous
+#: vector) are not counted either: its bound stays a lower bound, about 4 operations low
 GUARD_FP = 11
 
 #: fault bits every topology's guard has, in bit order

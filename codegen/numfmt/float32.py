@@ -101,7 +101,8 @@ class Float32Ops(LaneOps):
     def round_away(self, a: Any) -> np.ndarray:
         """The nearest integral value, halfway cases away from zero, with the sign of ``a`` (C99's
         ``roundf``).  Exact in the format itself: |a| - floor(|a|) is exact in binary floating point,
-        so no sum is rounded (|a| + 0.5 would round for the largest float64 below 0.5)."""
+        so no sum is rounded (|a| + 0.5 would round up for the largest value below 0.5 in the format,
+        e.g. 0.49999997f + 0.5f = 1.0f)."""
         a = np.asarray(a, self.real)
         m = np.abs(a)
         f = np.floor(m)

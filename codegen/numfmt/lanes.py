@@ -49,7 +49,3 @@ class LaneOps:
     def where(self, cond: Any, a: Any, b: Any) -> np.ndarray:
         """Per lane: a where cond, else b (a selection, no arithmetic)."""
         return np.where(cond, a, b).astype(self.real)
-
-    def select(self, conds: list[Any], choices: list[Any], default: Any) -> np.ndarray:
-        """Per lane: the first choice whose condition holds, else default."""
-        return np.select(conds, choices, default).astype(self.real)

@@ -58,10 +58,12 @@ def test_log_is_re_verified_offline(tmp_path, capsys):
     and a fabricated wrong result in the log is caught."""
     import json
 
+    import numpy as np
+
     from codegen.config import load_config
     from codegen.topology import topology_of
     from hil.framing import encode_frame
-    from hil.messages import step_payload
+    from hil.messages import batch_payload, step_payload
     from hil.schema import Msg, Schema
 
     cfg = ["--set", "controller.tables=published", "--strategy", "s1"]
@@ -96,6 +98,18 @@ def test_log_is_re_verified_offline(tmp_path, capsys):
     assert main(["hil", str(SPMSM), *cfg, "--check-log", str(log), "--json", str(js), "-q"]) == 1
     data = json.loads(js.read_text())
     assert data["mismatches"] == 1 and data["bad_results"] == 1 and data["discarded_frames_in"] == 1
+    # a BATCH whose count says 2 but whose body holds one state: a fault, its state not paired with
+    # the RESULT that follows (that result is unmatched, not compared)
+    log.write_text(clean)
+    two = batch_payload(schema, np.concatenate([x, x]))
+    batch = encode_frame(Msg.BATCH, 60010, two[:len(two) - schema.input_octets])  # count 2, one state
+    with open(log, "a") as fh:
+        fh.write(json.dumps({"t": 99.0, "dir": "out", "hex": batch.hex()}) + "\n")
+        fh.write(json.dumps({"t": 99.1, "dir": "in",
+                             "hex": encode_frame(Msg.RESULT, 60010, bytes(schema.result_octets)).hex()}) + "\n")
+    assert main(["hil", str(SPMSM), *cfg, "--check-log", str(log), "--json", str(js), "-q"]) == 1
+    data = json.loads(js.read_text())
+    assert data["bad_batches"] == 1 and data["mismatches"] == 0 and data["unmatched_results"] == 1
     capsys.readouterr()
     assert main(["hil", str(SPMSM), "--strategy", "s2", "--set", "controller.tables=published",
                  "--check-log", str(log), "-q"]) == 2  # another config: refused, naming both hashes

@@ -23,6 +23,7 @@ import numpy as np
 from ...kernels.guard import AllAtLeast, AllAtMost, Check, IndexAtMost, RealInRangeWhen, fault_bits, motor_checks
 from ...numfmt.float32 import FLOAT32
 from ...records import MOTOR_INPUT_FIELDS, Field, Record, fields
+from .vectors import N_STATES, OOO
 
 #: segments per period (a virtual vector's 7-segment sequence)
 N_SEGMENTS = 7
@@ -60,8 +61,8 @@ OUTPUT_FIELDS: tuple[Field, ...] = fields("""
     cand           u16   N_MAX_EVAL  resolved member (vector id) of group j; 0 beyond n_eval
 """, units={"cost_best": "N*m", "costs": "N*m"}, N_MAX_EVAL=N_MAX_EVAL, N_SEGMENTS=N_SEGMENTS)
 
-#: first virtual vector id; ids above N_IDS - 1 are not vectors
-FIRST_VIRTUAL = 27
+#: first virtual vector id (after the 27 switching states); ids above N_IDS - 1 are not vectors
+FIRST_VIRTUAL = N_STATES
 N_IDS = 63
 
 #: The input guard as data (numerics.md "Input guard and safe decision"), evaluated by codegen.kernels.guard.
@@ -81,7 +82,7 @@ FAULT_BITS: tuple[tuple[str, int, str], ...] = fault_bits({
 FAULT = {name: bit for name, bit, _ in FAULT_BITS}
 
 #: safe decision on a tripped guard: OOO for the whole period
-SAFE_STATE = 13
+SAFE_STATE = OOO
 
 #: numpy records laid out exactly like the C structs (checked against cffi at build time).
 INPUT = Record("ttype_input", INPUT_FIELDS)

@@ -55,14 +55,14 @@ def three_level_context(model: Model, t: ThreeLevelTables, target: str) -> dict:
     # holds, 27-MPDTC its one row's groups in row order
     cases = {g: {"group": g, "label": t.group_labels[g],
                  "members": [{"v": v, "virtual": vv.is_virtual(v), "pat": t.seq_pat[v]}
-                             for v in t.groups[g][:t.group_n[g]]]} for g in range(len(t.groups))}
+                             for v in t.groups[g]]} for g in range(len(t.groups))}
     resolve_cases = [cases[g] for g in sorted({g for r in t.row_groups for g in r})]
     row_cases = [_distinct_patterns(cases[g]) for g in t.row_groups[0]] if t.n_sectors == 1 else []
     return step_context(model, target, (INPUT, OUTPUT), FAULT_BITS, **{
         **table_fields(t), "topology_macro": "MPC_TOPOLOGY_THREE_LEVEL", "guard": GUARD, "dq": DQ,
         "first_virtual": FIRST_VIRTUAL, "seq": seq, "seq_pat": seq_pat,
         "resolve_cases": resolve_cases, "row_cases": row_cases,
-        "row_members": sum(t.group_n[g] for g in t.row_groups[0]) if row_cases else 0,
+        "row_members": sum(t.group_n[g] for g in t.row_groups[0]) if t.n_sectors == 1 else 0,
         "rows": rows, "row_n": t.row_n, "max_groups": mg, "min_groups": min(t.row_n),
         "n_segments": N_SEGMENTS,
         "n_max_eval": N_MAX_EVAL, "safe_state": SAFE_STATE, "output_last": OUTPUT.fields[-1].name,
