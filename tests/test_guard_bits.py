@@ -10,7 +10,7 @@ import ctypes.util
 import numpy as np
 import pytest
 
-from codegen.kernels.guard import Check
+from codegen.kernels.guard import Check, guard_fp
 from codegen.numfmt.float32 import FLOAT32, Float32
 from codegen.stages.verify import mismatch_mask
 from codegen.topologies.ttype.records import FAULT as TTYPE_FAULT
@@ -116,3 +116,18 @@ def test_round_away_is_c99_roundf() -> None:
     got = FLOAT32.ops.round_away(x)
     want = np.array([libm.roundf(float(v)) for v in x], np.float32)
     assert np.array_equal(got.view(np.uint32), want.view(np.uint32))  # equal bits, signed zeros included
+
+
+@pytest.mark.parametrize("name", CASES)
+def test_the_bound_counts_every_compare_of_the_fast_path(name: str) -> None:
+    """guard_fp (the cycle bound's guard operations) counts one operation per compare the generated
+    fast path makes, plus the sum i_a + i_b and the branch on their union."""
+    path, overrides, guard = CASES[name]
+    m = model_for(path, **overrides)
+    topo = topology_of(m)
+    source = topo.render(m, topo.derive(m), "host")[f"{m.prefix}_mpc.c"]
+    fast = source[source.index(f"static inline uint16_t {m.prefix}_guard("):]
+    fast = fast[:fast.index("\n}\n")]
+    compares = sum(fast.count(f"{m.prefix}_{op}(") for op in ("abs_over", "below", "above"))
+    compares += fast.count("(uint32_t)in->")  # an index's upper limit, an index range test
+    assert compares == guard_fp(guard) - 2

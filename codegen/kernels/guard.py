@@ -20,16 +20,9 @@ from codegen.kernels.consts import Constants
 from codegen.kernels.frames import third_phase
 from codegen.numfmt import Ops
 
-__all__ = ["GUARD_FP", "COMMON_FAULTS", "COMMON_FAULT_DOCS", "PhaseCurrents", "AllAtLeast", "AllAtMost", "AbsAtMost",
+__all__ = ["guard_fp", "COMMON_FAULTS", "COMMON_FAULT_DOCS", "PhaseCurrents", "AllAtLeast", "AllAtMost", "AbsAtMost",
            "IndexAtMost", "RealInRangeWhen", "Check", "fault_bits", "motor_checks", "evaluate", "gates_off"]
 
-#: essential operations of a guard, for the cycle bound (``Topology.essential_ops``): one compare per
-#: check of the two-level guard (|i_a|, |i_b|, |i_c|, |theta|, |omega|, |T*|, the DC-link low and high
-#: limits, the state index: 9), the sum i_a + i_b that gives |i_c|, and the one branch on their union;
-#: the absolute values are sign masks inside the compares (float32 compares bit patterns), not counted.
-#: The T-type guard's further checks (the second capacitor's two limits, T_N of a virtual previous
-#: vector) are not counted either: its bound stays a lower bound, about 4 operations low
-GUARD_FP = 11
 
 #: fault bits every topology's guard has, in bit order
 COMMON_FAULTS: tuple[str, ...] = ("CURRENT", "UDC_LOW", "UDC_HIGH", "ANGLE", "SPEED", "TORQUE_REF", "STATE")
@@ -145,6 +138,25 @@ def motor_checks() -> tuple[Check, ...]:
         AbsAtMost("SPEED", "omega_e_rad_s", "OMEGA_GUARD_RAD_S"),
         AbsAtMost("TORQUE_REF", "torque_ref_nm", "TORQUE_REF_GUARD_NM"),
     )
+
+
+def guard_fp(checks: tuple[Check, ...]) -> int:
+    """Essential operations of a guard, for the cycle bound (``Topology.essential_ops``), counted from
+    its checks: one compare per checked field (the absolute values are sign masks inside the
+    compares: float32 compares bit patterns); a phase-current check also |i_c|, and the sum
+    i_a + i_b that gives it; a range check applied under an index range one compare per bound, zero
+    included in the sign test when it has no lower bound, and one for the index range; then the one
+    branch on their union.  Two-level: 9 compares (|i_a|, |i_b|, |i_c|, |theta|, |omega|, |T*|, the
+    DC-link's low and high limits, the state index), the sum, the branch: 11."""
+    n = 1  # the branch on the union
+    for c in checks:
+        if c.kind == "phase_currents":
+            n += 3 + 1
+        elif c.kind == "real_in_range_when":
+            n += (1 if c.lo is None else 2) + 1
+        else:  # all_at_least, all_at_most, abs_at_most, index_at_most: a compare a field
+            n += len(c.fields)
+    return n
 
 
 def _ok(ops: Ops, c: Check, k: Constants, x: np.ndarray) -> np.ndarray:

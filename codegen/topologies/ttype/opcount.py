@@ -11,8 +11,9 @@ from __future__ import annotations
 
 from typing import Any
 
-from codegen.kernels.guard import GUARD_FP
+from codegen.kernels.guard import guard_fp
 from codegen.kernels.trig import SINCOS_TABLE_LOADS, sincos_ops
+from codegen.topologies.ttype.records import GUARD
 
 
 def essential_ops(tables: Any) -> dict[str, dict[str, int]]:
@@ -20,7 +21,7 @@ def essential_ops(tables: Any) -> dict[str, dict[str, int]]:
     ``fp``, ``sqrt``, ``div``, ``load``, ``store``."""
     sincos_fp, sincos_consts = sincos_ops(tables.nf)  # one generated sin/cos in the step's format
     basic_only = tables.n_sectors == 1  # 27-MPDTC
-    fp = GUARD_FP + 3 + 3 * sincos_fp  # guard, theta(k+1), theta(k+2), three sin/cos
+    fp = guard_fp(GUARD) + 3 + 3 * sincos_fp  # guard, theta(k+1), theta(k+2), three sin/cos
     fp += 3 + 6 + 1 + 2 + 6 + 8  # Clarke, Park, i_c, V cos/sin, Euler bases, Euler step (delay)
     fp += 3 + 4 + 2  # neutral-point patterns, charge, V_o(k+1)
     fp += 3 + 1 + 3  # flux, torque, |psi|^2

@@ -13,8 +13,9 @@ from __future__ import annotations
 
 from typing import Any
 
-from codegen.kernels.guard import GUARD_FP
+from codegen.kernels.guard import guard_fp
 from codegen.kernels.trig import SINCOS_TABLE_LOADS, sincos_ops
+from codegen.topologies.twolevel.records import GUARD
 
 
 def essential_ops(tables: Any) -> dict[str, dict[str, int]]:
@@ -22,7 +23,7 @@ def essential_ops(tables: Any) -> dict[str, dict[str, int]]:
     ``fp``, ``sqrt``, ``div``, ``load``, ``store``."""
     sincos_fp, sincos_consts = sincos_ops(tables.nf)  # one generated sin/cos in the step's format
     geo = tables.predictor == "flux-geometry"
-    fp = GUARD_FP + sincos_fp + 3 + 6 + 3  # guard, sin/cos, Clarke, Park, dq flux
+    fp = guard_fp(GUARD) + sincos_fp + 3 + 6 + 3  # guard, sin/cos, Clarke, Park, dq flux
     if geo:
         fp += 6 + 2 + 1 + 4 + 3  # inverse Park, psi_f (cos, sin), U_dc dt, torque, |psi|^2
         fp += 4 if tables.delay_compensation else 0
