@@ -52,13 +52,16 @@ class Topology(Protocol):
     title: str
     #: every strategy, in report order; the first is the baseline others are compared to
     strategies: tuple[str, ...]
-    #: the step's records (every layout derives from them)
+    #: the step's input record (every layout derives from it)
     input_record: Record
-    output_record: Record
     #: dotted name of the Python reference step (generated comments)
     reference: str
     #: what the recorded bench trajectory is
     trajectory_doc: str
+
+    def output_record(self, model: Model) -> Record:
+        """The step's output record for ``model``'s strategy (every layout derives from it)."""
+        ...
 
     def derive(self, model: Model, progress: Progress | None = None) -> Any:
         """The step's derived tables for ``model.controller.strategy`` (derived once)."""

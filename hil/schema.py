@@ -179,7 +179,7 @@ class Schema:
         """The schema of ``model``'s controller (its topology's records in its number format)."""
         topo = topology_of(model)
         nf = number_format(model.controller.number_format)
-        return cls(topo.input_record.bind(nf), topo.output_record.bind(nf), model.config_hash(), nf.name)
+        return cls(topo.input_record.bind(nf), topo.output_record(model).bind(nf), model.config_hash(), nf.name)
 
     def header(self, record: Record) -> RecordLayout:
         """A header record bound like the controller records."""

@@ -33,7 +33,7 @@ import numpy as np
 from codegen.errors import UsageError
 from codegen.model import Model
 from codegen.numfmt import FLOAT_CONTROLLER, IDEAL, QUANTISED, number_format
-from codegen.records import REAL, RecordLayout
+from codegen.records import REAL, Record, RecordLayout
 from codegen.stages.fwdata import evenly_spaced
 from codegen.teststates import in_format
 from codegen.topology import topology_of
@@ -116,18 +116,18 @@ def _agreement(topo: Any, t32: Any, t_fx: Any, x32: np.ndarray, x_fx: np.ndarray
     return out
 
 
-def _errors(topo: Any, t_fx: Any, t32: Any, t_64: Any, x_fx: np.ndarray) -> dict[str, Any]:
+def _errors(topo: Any, output: Record, t_fx: Any, t32: Any, t_64: Any, x_fx: np.ndarray) -> dict[str, Any]:
     """Fixed and float32 outputs against the float64 ideal on the same physical states ``x_fx`` (fixed)."""
     lay_fx = topo.input_record.bind(t_fx.nf)
     x64 = in_format(x_fx, topo.input_record.bind(number_format(IDEAL)), lay_fx)
     x32 = in_format(x_fx, topo.input_record.bind(t32.nf), lay_fx)
     ofx, o32, o64 = topo.step_batch(t_fx, x_fx), topo.step_batch(t32, x32), topo.step_batch(t_64, x64)
     ok = (ofx["fault"] == 0) & (o32["fault"] == 0) & (o64["fault"] == 0)
-    out_fx, out_32 = topo.output_record.bind(t_fx.nf), topo.output_record.bind(t32.nf)
+    out_fx, out_32 = output.bind(t_fx.nf), output.bind(t32.nf)
     res: dict[str, Any] = {"states": int(ok.sum())}
     for name in ERROR_FIELDS:
         ideal = o64[name][ok]
-        res[name] = {"unit": topo.output_record.field(name).unit,
+        res[name] = {"unit": output.field(name).unit,
                      QUANTISED: _stats(out_fx.decode(name, ofx[name][ok]) - ideal, hist=True),
                      FLOAT_CONTROLLER: _stats(out_32.decode(name, o32[name][ok]) - ideal),
                      "ideal_max_abs": float(np.abs(ideal).max()) if ideal.size else 0.0}
@@ -198,15 +198,16 @@ def analyse(model: Model, strategies: list[str] | None = None, random_states: in
         own32 = in_format(own_fx, topo.input_record.bind(t_32.nf), topo.input_record.bind(t_fx.nf))
         rnd_fx = in_format(rnd32, topo.input_record.bind(t_fx.nf))
         t_64 = topo.derive(m_fx.with_controller(number_format=IDEAL, fixed_q=None))
-        errors = {"closed_loop": _errors(topo, t_fx, t_32, t_64, cl_fx),
-                  "random": _errors(topo, t_fx, t_32, t_64, rnd_fx)}
+        output = topo.output_record(m_fx)
+        errors = {"closed_loop": _errors(topo, output, t_fx, t_32, t_64, cl_fx),
+                  "random": _errors(topo, output, t_fx, t_32, t_64, rnd_fx)}
         o_fx = topo.step_batch(t_fx, cl_fx)
         ok_in = o_fx["fault"] == 0
         sc = t_fx.scaling
         per[s] = {
             "scaling": {"frac_bits": sc.frac_bits, "exps_v_a_s": list(sc.exps), "mode": sc.mode},
             "signals": (_signal_rows(topo.input_record.bind(t_fx.nf), cl_fx, ok_in)
-                        + _signal_rows(topo.output_record.bind(t_fx.nf), o_fx, ok_in)),
+                        + _signal_rows(output.bind(t_fx.nf), o_fx, ok_in)),
             "constants": _constant_rows(t_fx, t_64),
             "errors": errors,
             "agreement": {"closed_loop": _agreement(topo, t_32, t_fx, cl32, cl_fx),

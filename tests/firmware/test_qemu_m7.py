@@ -65,7 +65,7 @@ def test_selftest_states_cover_every_guard(config, strategy):
     bits = sorted({int(b) for b in y["fault"] if b and not (b & (b - 1))})
     assert len(bits) >= 7, f"single fault bits seen: {bits}"
     assert (y["fault"] == 0).mean() > 0.5
-    for f in topo.output_record.fields:
+    for f in topo.output_record(m).fields:
         if f.kind == REAL:
             assert np.all(np.isfinite(y[f.name]))
 

@@ -30,7 +30,7 @@ def test_stm32h743_build_layout(tmp_path):
     assert tables and 0x20000000 <= int(tables.group(1), 16) < 0x20020000, "tables not in DTCM"
     nm = subprocess.run(["arm-none-eabi-nm", str(res.image)], capture_output=True, text=True, check=True).stdout
     addr = {line.split()[2]: int(line.split()[0], 16) for line in nm.splitlines() if len(line.split()) == 3}
-    for table in ("spmsm_rows", "spmsm_row_n", "spmsm_ux", "spmsm_uy", "spmsm_zero_sw", "spmsm_vec_to_sw"):
+    for table in ("spmsm_rows", "spmsm_row_n", "spmsm_uxy", "spmsm_zero_sw", "spmsm_vec_to_sw"):
         assert 0x20000000 <= addr[table] < 0x20020000, table
     assert addr["cm7_vectors"] == 0x08000000
     assert "memcpy" not in addr or addr["memcpy"] < 0x10000  # the step calls no library copy out of ITCM

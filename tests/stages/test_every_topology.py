@@ -11,6 +11,7 @@ from pathlib import Path
 import pytest
 
 from codegen.cli import main
+from codegen.config import load_config
 from codegen.topology import TOPOLOGIES, topology
 
 from conftest import EXAMPLES
@@ -57,7 +58,7 @@ def test_firmware_project_is_the_configs_topology(tmp_path: Path, name: str):
         args += ["--set", "controller.tables=published"]
     assert main(args) == 0
     header = next((out / "gen").glob("*_mpc.h")).read_text()
-    for f in topology(name).input_record.fields + topology(name).output_record.fields:
+    for f in topology(name).input_record.fields + topology(name).output_record(load_config(CONFIGS[name])).fields:
         assert f" {f.name}" in header, f.name
     data = (out / "gen" / "mpc_selftest_data.c").read_text()
     assert topology(name).reference in data

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cache
 
 import numpy as np
 
@@ -172,26 +173,34 @@ def _group_label(g: tuple[int, ...]) -> str:
     return "/".join(vv.vector_name(i) for i in g)
 
 
-def derive_three_level(model: Model) -> ThreeLevelTables:
-    """Derive the step's tables for ``model.controller.strategy``."""
-    strategy = model.controller.strategy
+@cache
+def _row_sets(strategy: str) -> tuple[tuple[tuple[tuple[int, ...], ...], ...], tuple[str, ...], int]:
+    """The strategy's candidate rows as member sets per group, their labels, and the sector count."""
     if strategy == "mpdtc63":
         table = cd.derive_candidate_table()
-        row_sets = [r.groups for r in table.rows]
-        labels = [_label_63(r.prev_state, r.sector) for r in table.rows]
-        n_sectors = cd.N_SECTORS
-    elif strategy == "mpdtc27":
+        return (tuple(r.groups for r in table.rows), tuple(_label_63(r.prev_state, r.sector) for r in table.rows),
+                cd.N_SECTORS)
+    if strategy == "mpdtc27":
         gs = []
         for n in range(v.N_BASIC):
             members = list(v.BASIC_STATES[n])
             if n == 0:  # the zero vector: OOO first (ties keep the earlier member)
                 members = [v.OOO, v.NNN, v.PPP]
             gs.append(tuple(members))
-        row_sets = [tuple(gs)]
-        labels = ["all 27 states, 19 voltage groups u0..u18"]
-        n_sectors = 1
-    else:
-        raise ValueError(f"strategy {strategy!r} is not a three-level strategy (mpdtc27, mpdtc63)")
+        return (tuple(gs),), ("all 27 states, 19 voltage groups u0..u18",), 1
+    raise ValueError(f"strategy {strategy!r} is not a three-level strategy (mpdtc27, mpdtc63)")
+
+
+def max_groups_of(strategy: str) -> int:
+    """Most voltage groups a row of ``strategy`` holds (= ``ThreeLevelTables.max_groups``): the
+    costs a step can evaluate, the length of the output record's ``costs`` and ``cand``."""
+    return max(len(row) for row in _row_sets(strategy)[0])
+
+
+def derive_three_level(model: Model) -> ThreeLevelTables:
+    """Derive the step's tables for ``model.controller.strategy``."""
+    strategy = model.controller.strategy
+    row_sets, labels, n_sectors = _row_sets(strategy)
     groups: list[tuple[int, ...]] = []
     index: dict[tuple[int, ...], int] = {}
     row_groups = []

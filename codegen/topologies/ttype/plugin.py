@@ -14,15 +14,17 @@ import numpy as np
 from codegen.errors import Unsupported
 from codegen.hostbuild import HostLib
 from codegen.model import STRATEGIES_BY_TOPOLOGY, Model
+from codegen.records import Record
 from codegen.teststates import in_format
 from codegen.topologies.ttype import fwstates, paper, scenarios, sim
 from codegen.topologies.ttype import reference as ref
 from codegen.topologies.ttype import report as report_md
 from codegen.topologies.ttype import states as test_states
 from codegen.topologies.ttype import tables_text as text
-from codegen.topologies.ttype.derive import derive_three_level
+from codegen.topologies.ttype.derive import derive_three_level, max_groups_of
 from codegen.topologies.ttype.hostbuild import build_three_level_library
-from codegen.topologies.ttype.records import INPUT, OUTPUT
+from codegen.topologies.ttype.records import INPUT
+from codegen.topologies.ttype.records import output_record as _output_record
 from codegen.topologies.ttype.render import render_three_level
 from codegen.topology import Log, Progress, Trajectory, record_trajectory
 
@@ -30,7 +32,6 @@ name = "t-type"
 title = "T-type three-level MPDTC"
 strategies = STRATEGIES_BY_TOPOLOGY["t-type"]
 input_record = INPUT
-output_record = OUTPUT
 reference = "codegen.topologies.ttype.reference.step_batch"
 trajectory_doc = "states evenly spaced over the 27-MPDTC run at rated speed and torque"
 #: steady speeds whose closed-loop states join verification (the paper's Table 5: 300, 1800, 3000 r/min)
@@ -40,6 +41,11 @@ render = render_three_level
 report = report_md.report_text
 step_batch = ref.step_batch
 selftest_states = fwstates.selftest_states
+
+
+def output_record(model: Model) -> Record:
+    """The strategy's output record: ``costs`` and ``cand`` as long as its longest candidate row."""
+    return _output_record(max_groups_of(model.controller.strategy))
 
 
 def derive(model: Model, progress: Progress | None = None) -> Any:

@@ -18,6 +18,8 @@ segments applied in order; the plant skips zero-length segments.
 """
 from __future__ import annotations
 
+from functools import cache
+
 import numpy as np
 
 from ...kernels.guard import AllAtLeast, AllAtMost, Check, IndexAtMost, RealInRangeWhen, fault_bits, motor_checks
@@ -27,8 +29,6 @@ from .vectors import N_STATES, OOO
 
 #: segments per period (a virtual vector's 7-segment sequence)
 N_SEGMENTS = 7
-#: most costs a step evaluates: 19 voltage groups of 27-MPDTC (63-MPDTC: 3..7)
-N_MAX_EVAL = 19
 
 INPUT_FIELDS: tuple[Field, ...] = MOTOR_INPUT_FIELDS + fields("""
     uc1_v          real  1  upper DC-link capacitor voltage, V
@@ -38,7 +38,7 @@ INPUT_FIELDS: tuple[Field, ...] = MOTOR_INPUT_FIELDS + fields("""
     t_n_prev_s     real  1  T_N of the current period, s (used if prev_vector is virtual)
 """)
 
-OUTPUT_FIELDS: tuple[Field, ...] = fields("""
+_OUTPUT_FIELDS = """
     te_est_nm      real  1           predicted torque at k+1, N*m
     psi_est_wb     real  1           predicted stator-flux magnitude at k+1, Wb
     psi_ref_wb     real  1           flux reference psi* (MTPA), Wb
@@ -59,7 +59,16 @@ OUTPUT_FIELDS: tuple[Field, ...] = fields("""
     fault          u16   1           fault bits (FAULT_* below); nonzero => safe decision
     gates_off      u16   1           1: disable the PWM outputs this period (fault, controller.fault_action); 0: apply
     cand           u16   N_MAX_EVAL  resolved member (vector id) of group j; 0 beyond n_eval
-""", units={"cost_best": "N*m", "costs": "N*m"}, N_MAX_EVAL=N_MAX_EVAL, N_SEGMENTS=N_SEGMENTS)
+"""
+
+
+@cache
+def output_record(n_max_eval: int) -> Record:
+    """The output record of a strategy whose rows hold at most ``n_max_eval`` voltage groups (the
+    costs a step can evaluate: 19 for 27-MPDTC's one row, 7 for 63-MPDTC's Table 3; the derived
+    tables' ``max_groups``), so that no slot is always zero."""
+    return Record("ttype_output", fields(_OUTPUT_FIELDS, units={"cost_best": "N*m", "costs": "N*m"},
+                                         N_MAX_EVAL=n_max_eval, N_SEGMENTS=N_SEGMENTS))
 
 #: first virtual vector id (after the 27 switching states); ids above N_IDS - 1 are not vectors
 FIRST_VIRTUAL = N_STATES
@@ -86,6 +95,4 @@ SAFE_STATE = OOO
 
 #: numpy records laid out exactly like the C structs (checked against cffi at build time).
 INPUT = Record("ttype_input", INPUT_FIELDS)
-OUTPUT = Record("ttype_output", OUTPUT_FIELDS)
 INPUT_DTYPE: np.dtype = INPUT.bind(FLOAT32).dtype
-OUTPUT_DTYPE: np.dtype = OUTPUT.bind(FLOAT32).dtype

@@ -58,7 +58,7 @@ from codegen.kernels.sector import sector12
 from codegen.kernels.trig import sincos
 from codegen.numfmt import Ops
 from codegen.topologies.ttype.derive import DQ, ThreeLevelTables
-from codegen.topologies.ttype.records import FAULT, GUARD, INPUT, N_MAX_EVAL, N_SEGMENTS, OUTPUT, SAFE_STATE
+from codegen.topologies.ttype.records import FAULT, GUARD, INPUT, N_SEGMENTS, SAFE_STATE, output_record
 
 
 def guard(t: ThreeLevelTables, x: np.ndarray) -> np.ndarray:
@@ -119,7 +119,7 @@ class _Midpoint:
 
 def _step(t: ThreeLevelTables, x: np.ndarray) -> np.ndarray:
     # faulted lanes compute on zeros (their outputs are overwritten below)
-    f = begin_step(t.nf, t.consts, x, guard(t, x), INPUT, OUTPUT)
+    f = begin_step(t.nf, t.consts, x, guard(t, x), INPUT, output_record(t.max_groups))
     o, k, n, out, fault, ok, zf, inp = f.o, f.k, f.n, f.out, f.fault, f.ok, f.zero, f.inp
     ia, ib, th, om = inp["ia_a"], inp["ib_a"], inp["theta_e_rad"], inp["omega_e_rad_s"]
     uc1, uc2, tref = inp["uc1_v"], inp["uc2_v"], inp["torque_ref_nm"]
@@ -197,8 +197,8 @@ def _step(t: ThreeLevelTables, x: np.ndarray) -> np.ndarray:
     best = o.zeros(n)
     best_v = np.zeros(n, np.intp)
     best_tn = o.zeros(n)
-    costs = o.zeros((n, N_MAX_EVAL))
-    cand = np.zeros((n, N_MAX_EVAL), np.uint16)
+    costs = o.zeros((n, t.max_groups))
+    cand = np.zeros((n, t.max_groups), np.uint16)
     n_members = np.zeros(n, np.intp)
     for j in range(t.max_groups):
         active = j < row_n
@@ -278,7 +278,7 @@ def _step(t: ThreeLevelTables, x: np.ndarray) -> np.ndarray:
         out[name] = value
     bad = ~ok
     if bad.any():
-        safe = OUTPUT.bind(f.nf).zeros(1)
+        safe = output_record(t.max_groups).bind(f.nf).zeros(1)
         safe["states"] = SAFE_STATE
         safe["vector"] = SAFE_STATE
         safe["seg_s"][0, 0] = k.TS_S

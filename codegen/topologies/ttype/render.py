@@ -14,10 +14,9 @@ from codegen.topologies.ttype.records import (
     FIRST_VIRTUAL,
     GUARD,
     INPUT,
-    N_MAX_EVAL,
     N_SEGMENTS,
-    OUTPUT,
     SAFE_STATE,
+    output_record,
 )
 
 
@@ -58,14 +57,14 @@ def three_level_context(model: Model, t: ThreeLevelTables, target: str) -> dict:
                              for v in t.groups[g]]} for g in range(len(t.groups))}
     resolve_cases = [cases[g] for g in sorted({g for r in t.row_groups for g in r})]
     row_cases = [_distinct_patterns(cases[g]) for g in t.row_groups[0]] if t.n_sectors == 1 else []
-    return step_context(model, target, (INPUT, OUTPUT), FAULT_BITS, **{
+    return step_context(model, target, (INPUT, output_record(mg)), FAULT_BITS, **{
         **table_fields(t), "topology_macro": "MPC_TOPOLOGY_THREE_LEVEL", "guard": GUARD, "dq": DQ,
         "first_virtual": FIRST_VIRTUAL, "seq": seq, "seq_pat": seq_pat,
         "resolve_cases": resolve_cases, "row_cases": row_cases,
         "row_members": sum(t.group_n[g] for g in t.row_groups[0]) if t.n_sectors == 1 else 0,
         "rows": rows, "row_n": t.row_n, "max_groups": mg, "min_groups": min(t.row_n),
         "n_segments": N_SEGMENTS,
-        "n_max_eval": N_MAX_EVAL, "safe_state": SAFE_STATE, "output_last": OUTPUT.fields[-1].name,
+        "safe_state": SAFE_STATE, "output_last": output_record(mg).fields[-1].name,
         "sincos_bound": sincos_bound(t.nf, "ANGLE_GUARD_RAD + 2 w Ts",
                                      2.0 * float(t.nf.decode("rad/s", t.const("OMEGA_GUARD_RAD_S")))
                                      * float(t.nf.decode("s", t.const("TS_S"))))})

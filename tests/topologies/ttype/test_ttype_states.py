@@ -23,7 +23,7 @@ def test_u_ref_lands_on_a_sector_border(fmt):
     x = states._nominal(m, 5000, rng)
     states._on_sector_border(m, x, rng)
     out = topo.step_batch(t, in_format(x, states.INPUT.bind(t.nf)))
-    lay = topo.output_record.bind(t.nf)
+    lay = topo.output_record(m).bind(t.nf)
     ang = np.arctan2(lay.decode("u_ref_beta_v", out["u_ref_beta_v"]), lay.decode("u_ref_alpha_v", out["u_ref_alpha_v"]))
     dist = np.abs((ang + math.pi / 12) % (math.pi / 6) - math.pi / 12)  # to the nearest 30-degree border
     ok = out["fault"] == 0

@@ -117,18 +117,21 @@ def test_63_evaluates_3_to_7_costs(built):
     m, t, lib = built
     x, out = _decisions(m, t, lib)
     if t.strategy == "mpdtc27":
-        assert (out["n_eval"] == 19).all() and (out["n_members"] == 27).all()
+        assert (out["n_eval"] == 19).all() and (out["n_members"] == 27).all() and out["costs"].shape[1] == 19
         return
     # PPP is never applied by 63-MPDTC (its zero is OOO); its rows are short
     normal = x["prev_vector"] != v.PPP
     assert ((out["n_eval"][normal] >= 3) & (out["n_eval"][normal] <= 7)).all()
     assert (out["n_eval"] == out["n_groups"]).all()
     assert set(np.unique(out["n_eval"][normal])) == {3, 4, 5, 6, 7} or len(np.unique(out["n_eval"][normal])) >= 3
-    # costs beyond n_eval are zero; the chosen candidate is the cheapest
-    for j in range(19):
+    # the record holds as many slots as the longest row (7), costs beyond n_eval are zero;
+    # the chosen candidate is the cheapest
+    slots = out["costs"].shape[1]
+    assert slots == out["cand"].shape[1] == t.max_groups == out["n_eval"].max() == 7
+    for j in range(slots):
         beyond = j >= out["n_eval"]
         assert (out["costs"][beyond, j] == 0).all() and (out["cand"][beyond, j] == 0).all()
-    assert np.array_equal(out["cost_best"], np.min(np.where(np.arange(19) < out["n_eval"][:, None], out["costs"], np.inf), axis=1).astype(np.float32))
+    assert np.array_equal(out["cost_best"], np.min(np.where(np.arange(slots) < out["n_eval"][:, None], out["costs"], np.inf), axis=1).astype(np.float32))
 
 
 def test_switching_constraint_t_n_and_segments(built):
