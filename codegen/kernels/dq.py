@@ -2,6 +2,8 @@
 
 Current-model flux (mptc-two-level.md Conventions):
     psi_d = L_d i_d + psi_f,  psi_q = L_q i_q,  |psi| = sqrt(psi_d^2 + psi_q^2).
+With L_d = L_q = L (surface PMSM) the same flux in alpha-beta needs no Park transform:
+    psi_alpha = L i_alpha + psi_f cos theta,  psi_beta = L i_beta + psi_f sin theta.
 
 Forward Euler of the dq current equations over one period dt
 (mptc-two-level.md Predictors "dq-euler"; mpdtc-three-level.md eq. (3)-(6)
@@ -22,7 +24,7 @@ from typing import Any
 from codegen.kernels.consts import Constants
 from codegen.numfmt import Ops
 
-__all__ = ["DqModel", "flux", "magnitude", "torque", "bases", "advance"]
+__all__ = ["DqModel", "flux", "flux_alpha_beta", "magnitude", "torque", "bases", "advance"]
 
 
 @dataclass(frozen=True)
@@ -47,6 +49,15 @@ def flux(ops: Ops, m: DqModel, i_d: Any, i_q: Any) -> tuple[Any, Any]:
     psi_d = ops.mul(m.l_d, i_d)
     psi_d = ops.add(psi_d, m.psi_f)
     return psi_d, ops.mul(m.l_q, i_q)
+
+
+def flux_alpha_beta(ops: Ops, m: DqModel, i_alpha: Any, i_beta: Any, psif_c: Any, psif_s: Any) -> tuple[Any, Any]:
+    """(psi_alpha, psi_beta) = (L i_alpha + psi_f cos, L i_beta + psi_f sin) of a surface PMSM
+    (L = ``m.l_d`` = ``m.l_q``; ``psif_c``, ``psif_s`` = psi_f (cos, sin) theta): the current-model
+    flux without the Park transform and its inverse."""
+    psi_a = ops.add(ops.mul(m.l_d, i_alpha), psif_c)
+    psi_b = ops.add(ops.mul(m.l_d, i_beta), psif_s)
+    return psi_a, psi_b
 
 
 def magnitude(ops: Ops, a: Any, b: Any) -> Any:

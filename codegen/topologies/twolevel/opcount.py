@@ -23,12 +23,12 @@ def essential_ops(tables: Any) -> dict[str, dict[str, int]]:
     ``fp``, ``sqrt``, ``div``, ``load``, ``store``."""
     sincos_fp, sincos_consts = sincos_ops(tables.nf)  # one generated sin/cos in the step's format
     geo = tables.predictor == "flux-geometry"
-    fp = guard_fp(GUARD) + sincos_fp + 3 + 6 + 3  # guard, sin/cos, Clarke, Park, dq flux
+    fp = guard_fp(GUARD) + sincos_fp + 3  # guard, sin/cos, Clarke
     if geo:
-        fp += 6 + 2 + 1 + 4 + 3  # inverse Park, psi_f (cos, sin), U_dc dt, torque, |psi|^2
+        fp += 2 + 4 + 1 + 4 + 3  # psi_f (cos, sin), alpha-beta flux, U_dc dt, torque, |psi|^2
         fp += 4 if tables.delay_compensation else 0
     else:
-        fp += 1 + 2 + 3 + 4 + 3 + 6 + 6  # |V|, V cos/sin, flux, torque, |psi|^2, inverse Park, Euler bases
+        fp += 6 + 1 + 2 + 3 + 4 + 3 + 6 + 6  # Park, |V|, V cos/sin, flux, torque, |psi|^2, inverse Park, Euler bases
         fp += 8 + 3 if tables.delay_compensation else 0
     if tables.psi_ref != "constant":
         fp += 3 + 1  # flux reference from the torque reference (table slope) and its inverse

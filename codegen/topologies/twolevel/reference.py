@@ -73,9 +73,7 @@ def _step(t: TwoLevelTables, x: np.ndarray) -> np.ndarray:
 
     s, c = sincos(o, th, k, t.sincos_tab, t.nf.sincos_form)
     i_alpha, i_beta = frames.clarke(o, ia, ib, k.INV_SQRT3)
-    i_d, i_q = frames.park(o, i_alpha, i_beta, s, c)
     model = DQ.resolve(k)
-    psi_d, psi_q = dq.flux(o, model, i_d, i_q)
 
     ux = o.array(t.ux)
     uy = o.array(t.uy)
@@ -84,9 +82,9 @@ def _step(t: TwoLevelTables, x: np.ndarray) -> np.ndarray:
 
     predict: Any
     if t.predictor == "flux-geometry":
-        psi_a, psi_b = frames.inv_park(o, psi_d, psi_q, s, c)
         psif_c = o.mul(k.PSI_F_WB, c)
         psif_s = o.mul(k.PSI_F_WB, s)
+        psi_a, psi_b = dq.flux_alpha_beta(o, model, i_alpha, i_beta, psif_c, psif_s)
         vdt = o.mul(udc, k.VDT_K)
         if t.delay_compensation:  # predict k+1 under the vector applied now
             psi_a = o.add(psi_a, o.mul(vdt, ux[pv]))
@@ -108,9 +106,9 @@ def _step(t: TwoLevelTables, x: np.ndarray) -> np.ndarray:
         vmag = o.mul(udc, k.VMAG_K)
         vc = o.mul(vmag, c)
         vs = o.mul(vmag, s)
-        i_d0, i_q0 = i_d, i_q
+        i_d0, i_q0 = frames.park(o, i_alpha, i_beta, s, c)
         if t.delay_compensation:
-            bd, bq = dq.bases(o, model, om, i_d, i_q)
+            bd, bq = dq.bases(o, model, om, i_d0, i_q0)
             i_d0, i_q0 = dq.advance(o, model, bd, bq, vc, vs, ux[pv], uy[pv])
         psi_d0, psi_q0 = dq.flux(o, model, i_d0, i_q0)
         te = dq.torque(o, k.TE_K, psi_d0, psi_q0, i_d0, i_q0)
