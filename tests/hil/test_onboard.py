@@ -53,7 +53,9 @@ def check(data: dict, decimation: int = 1) -> None:
         assert v["ok"], (name, v)
     assert data["within_tolerance"] and data["ok"]
     assert data["decision_changes"] > 100  # the controller switches
-    assert 0 < data["cycles_min"] <= data["cycles_mean"] <= data["cycles_max"]
+    # the step's time less the timer's measured overhead, floored at 0: a host step can be
+    # quicker than the overhead's estimate (virtual board), never all of them
+    assert 0 <= data["cycles_min"] <= data["cycles_mean"] <= data["cycles_max"] and data["cycles_mean"] > 0
     assert sum(data["cycles_hist"]) == data["periods"]
 
 
