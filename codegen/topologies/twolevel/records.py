@@ -61,4 +61,3 @@ OUTPUT = Record("twolevel_output", OUTPUT_FIELDS)
 #: numpy records of the float32 reference, laid out exactly like the C structs
 #: (checked against cffi at build time).
 INPUT_DTYPE: np.dtype = INPUT.bind(FLOAT32).dtype
-OUTPUT_DTYPE: np.dtype = OUTPUT.bind(FLOAT32).dtype
