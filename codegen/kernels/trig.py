@@ -172,10 +172,10 @@ def sincos(ops: Ops, x: Any, consts: Any, table: Any, form: SinCosForm) -> tuple
     r = ops.sub(x, t)
     t = ops.mul(fn, k.SINCOS_STEP_LO)
     r = ops.sub(r, t)
-    r2 = ops.mul(r, r)
-    ps = ops.mul(_horner(ops, [k[name] for name in sin_names(form)], r2), r)
+    rr = ops.mul(r, r)
+    ps = ops.mul(_horner(ops, [k[name] for name in sin_names(form)], rr), r)
     sr = ops.add(r, ps)
-    cr = ops.add(ops.const(1.0), _horner(ops, [k[name] for name in cos_names(form)], r2))
+    cr = ops.add(ops.const(1.0), _horner(ops, [k[name] for name in cos_names(form)], rr))
     sk, ck = tab[i], tab[i + 1]
     s_out = ops.add(ops.mul(sk, cr), ops.mul(ck, sr))
     c_out = ops.sub(ops.mul(ck, cr), ops.mul(sk, sr))
