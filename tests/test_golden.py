@@ -13,8 +13,13 @@ output bits change; where a recorded state is unchanged, 0-20 of its about
 3 700 chosen vectors per strategy differ, near-ties among the adversarial
 states; the adversarial angles moved to the new reduction's borders; the
 simulate metrics of the two-level examples are unchanged to the last bit and
-the 63-MPDTC metrics moved by at most 2.3e-5 relative); a change of behaviour
-is a re-recording, stated in its commit.
+the 63-MPDTC metrics moved by at most 2.3e-5 relative), the 63-MPDTC costs
+and cand cut to 7 columns when its output record shrank to its longest row
+(the 12 dropped columns all zero, the kept ones unchanged), and the SPMSM file
+when flux-geometry took the flux from the alpha-beta currents (flux and torque
+estimates differ in their last bits; 74-80 s1-s3 decisions of 4 000, all on the
+threshold and sector-border states; the simulate metrics unchanged); a change
+of behaviour is a re-recording, stated in its commit.
 """
 from __future__ import annotations
 

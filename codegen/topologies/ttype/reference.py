@@ -197,6 +197,7 @@ def _step(t: ThreeLevelTables, x: np.ndarray) -> np.ndarray:
     best = o.zeros(n)
     best_v = np.zeros(n, np.intp)
     best_tn = o.zeros(n)
+    neg_two_c_vo1 = o.neg(o.mul(vo1, k.TWO_C))  # once a step, like the C
     costs = o.zeros((n, t.max_groups))
     cand = np.zeros((n, t.max_groups), np.uint16)
     n_members = np.zeros(n, np.intp)
@@ -220,10 +221,9 @@ def _step(t: ThreeLevelTables, x: np.ndarray) -> np.ndarray:
             elif virt.any():
                 o_n, sa, d = mid.parts(io1, v)
                 # neutral-point deadbeat T_N = -(2C V_o(k+1) + Ts/3 A)/D, clamped to [T_N_min, Ts/3];
-                # divided as (2C V_o(k+1) + Ts/3 A)/(-D): the negation off the division's chain
-                num = o.mul(vo1, k.TWO_C)
-                num = o.add(num, o.mul(k.TS3_S, sa))
-                tn = o.where(o.ne(d, zf), o.div(num, o.neg(d)), k.TN_MIN_S)
+                # the numerator as (-2C V_o(k+1)) - Ts/3 A, the same value (rounding is symmetric)
+                num = o.sub(neg_two_c_vo1, o.mul(k.TS3_S, sa))
+                tn = o.where(o.ne(d, zf), o.div(num, d), k.TN_MIN_S)
                 tn = o.where(o.lt(tn, k.TN_MIN_S), k.TN_MIN_S, tn)
                 tn = o.where(o.gt(tn, k.TS3_S), k.TS3_S, tn)
                 q = mid.charge(virt, o_n, sa, d, tn)
