@@ -10,7 +10,7 @@ import ctypes.util
 import numpy as np
 import pytest
 
-from codegen.kernels.guard import Check, guard_fp
+from codegen.kernels.guard import Check, guard_ops
 from codegen.numfmt.float32 import FLOAT32, Float32
 from codegen.stages.verify import mismatch_mask
 from codegen.topologies.ttype.records import FAULT as TTYPE_FAULT
@@ -120,8 +120,8 @@ def test_round_away_is_c99_roundf() -> None:
 
 @pytest.mark.parametrize("name", CASES)
 def test_the_bound_counts_every_compare_of_the_fast_path(name: str) -> None:
-    """guard_fp (the cycle bound's guard operations) counts one operation per compare the generated
-    fast path makes, plus the sum i_a + i_b and the branch on their union."""
+    """guard_ops (the cycle bounds' guard operations) counts one compare per compare the generated
+    fast path makes, plus the branch on their union, and the sum i_a + i_b as an FP operation."""
     path, overrides, guard = CASES[name]
     m = model_for(path, **overrides)
     topo = topology_of(m)
@@ -130,4 +130,6 @@ def test_the_bound_counts_every_compare_of_the_fast_path(name: str) -> None:
     fast = fast[:fast.index("\n}\n")]
     compares = sum(fast.count(f"{m.prefix}_{op}(") for op in ("abs_over", "below", "above"))
     compares += fast.count("(uint32_t)in->")  # an index's upper limit, an index range test
-    assert compares == guard_fp(guard) - 2
+    ops = guard_ops(guard)
+    assert compares == ops["cmp"] - 1
+    assert ops["fp"] == fast.count(" isum = ")  # the sum i_a + i_b (the one FP operation)

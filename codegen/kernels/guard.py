@@ -20,7 +20,7 @@ from codegen.kernels.consts import Constants
 from codegen.kernels.frames import third_phase
 from codegen.numfmt import Ops
 
-__all__ = ["guard_fp", "COMMON_FAULTS", "COMMON_FAULT_DOCS", "PhaseCurrents", "AllAtLeast", "AllAtMost", "AbsAtMost",
+__all__ = ["guard_ops", "COMMON_FAULTS", "COMMON_FAULT_DOCS", "PhaseCurrents", "AllAtLeast", "AllAtMost", "AbsAtMost",
            "IndexAtMost", "RealInRangeWhen", "Check", "fault_bits", "motor_checks", "evaluate", "gates_off"]
 
 
@@ -140,23 +140,25 @@ def motor_checks() -> tuple[Check, ...]:
     )
 
 
-def guard_fp(checks: tuple[Check, ...]) -> int:
-    """Essential operations of a guard, for the cycle bound (``Topology.essential_ops``), counted from
-    its checks: one compare per checked field (the absolute values are sign masks inside the
-    compares: float32 compares bit patterns); a phase-current check also |i_c|, and the sum
-    i_a + i_b that gives it; a range check applied under an index range one compare per bound, zero
-    included in the sign test when it has no lower bound, and one for the index range; then the one
-    branch on their union.  Two-level: 9 compares (|i_a|, |i_b|, |i_c|, |theta|, |omega|, |T*|, the
-    DC-link's low and high limits, the state index), the sum, the branch: 11."""
-    n = 1  # the branch on the union
+def guard_ops(checks: tuple[Check, ...]) -> dict[str, int]:
+    """Essential operations of a guard, for the cycle bounds (``Topology.essential_ops``), counted from
+    its checks: ``cmp``, one compare per checked field (the absolute values are sign masks inside the
+    compares: float32 compares bit patterns); a phase-current check three (|i_a|, |i_b|, |i_c|) and,
+    as ``fp``, the sum i_a + i_b that gives i_c; a range check applied under an index range one
+    compare per bound, zero included in the sign test when it has no lower bound, and one for the
+    index range; then the one branch on their union (counted with the compares: neither writes a
+    register).  Two-level: 9 compares (|i_a|, |i_b|, |i_c|, |theta|, |omega|, |T*|, the DC-link's low
+    and high limits, the state index) and the branch, ``cmp`` 10; the sum, ``fp`` 1."""
+    ops = {"fp": 0, "cmp": 1}  # the branch on the union
     for c in checks:
         if c.kind == "phase_currents":
-            n += 3 + 1
+            ops["cmp"] += 3
+            ops["fp"] += 1
         elif c.kind == "real_in_range_when":
-            n += (1 if c.lo is None else 2) + 1
+            ops["cmp"] += (1 if c.lo is None else 2) + 1
         else:  # all_at_least, all_at_most, abs_at_most, index_at_most: a compare a field
-            n += len(c.fields)
-    return n
+            ops["cmp"] += len(c.fields)
+    return ops
 
 
 def _ok(ops: Ops, c: Check, k: Constants, x: np.ndarray) -> np.ndarray:

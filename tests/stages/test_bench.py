@@ -36,8 +36,12 @@ def test_emulated_bench(tmp_path):
         assert e["m7_instructions_per_step"] > 50 and e["ratio_to_conventional"] > 0
         # the cycle estimate (traced path through the M7 pipeline model) and the lower bound beside it
         assert e["m7_cycles_est_min"] <= e["m7_cycles_est_median"] <= e["m7_cycles_est_max"]
-        assert 0 < e["m7_cycles_bound"] <= e["m7_cycles_est_median"]
+        # (every traced state's estimate at least its model bound, else strategy_cycles raises)
+        assert 0 < e["m7_cycles_bound_min"] <= e["m7_cycles_bound"] <= e["m7_cycles_est_median"]
         assert e["m7_cycles_est_over_bound"] == e["m7_cycles_est_median"] / e["m7_cycles_bound"]
+        # the overlap bound (every unit overlapping): lower than the model's for these float32 steps
+        assert 0 < e["m7_cycles_bound_overlap"] < e["m7_cycles_bound"]
+        assert e["m7_cycles_est_over_bound_overlap"] == e["m7_cycles_est_median"] / e["m7_cycles_bound_overlap"]
         # a step cannot take fewer cycles than half its instructions (two-wide issue)
         assert e["m7_cycles_est_median"] >= e["m7_instructions_per_step"] / 2
     # every simplified strategy holds the zero vector on most samples: cheaper median

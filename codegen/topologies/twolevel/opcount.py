@@ -1,10 +1,11 @@
 """Essential operations of the two-level step, counted from its algorithm (``reference.py``), for the
 cycle lower bound of ``mpcgen bench --emulated`` (``codegen.stages.cycles.cycle_bound``).
 
-Counts, not measurements: the FP operations (add, sub, mul, abs, compare,
-convert, select), square roots, divisions, loads (inputs, constants, table
-cells) and stores (outputs) the algorithm cannot do without, per step and per
-evaluated candidate (``n_eval``).  With flux-geometry and V0 first in every
+Counts, not measurements: the FP operations that write a register (add,
+sub, mul, abs, convert, select), the compares and branches, square roots,
+divisions, loads (inputs, constants, table cells) and stores (outputs) the
+algorithm cannot do without, per step and per evaluated candidate
+(``n_eval``).  With flux-geometry and V0 first in every
 row, V0's prediction is the estimate itself: its first candidate counts only
 the cost.  Float32 names; a fixed-point step does the same operations on
 integers.
@@ -13,17 +14,18 @@ from __future__ import annotations
 
 from typing import Any
 
-from codegen.kernels.guard import guard_fp
+from codegen.kernels.guard import guard_ops
 from codegen.kernels.trig import SINCOS_TABLE_LOADS, sincos_ops
 from codegen.topologies.twolevel.records import GUARD
 
 
 def essential_ops(tables: Any) -> dict[str, dict[str, int]]:
     """``{"per_step": counts, "per_candidate": counts, "per_member": counts}``, counts with keys
-    ``fp``, ``sqrt``, ``div``, ``load``, ``store``."""
+    ``fp``, ``cmp``, ``sqrt``, ``div``, ``load``, ``store``."""
     sincos_fp, sincos_consts = sincos_ops(tables.nf)  # one generated sin/cos in the step's format
     geo = tables.predictor == "flux-geometry"
-    fp = guard_fp(GUARD) + sincos_fp + 3  # guard, sin/cos, Clarke
+    guard = guard_ops(GUARD)
+    fp, cmp = guard["fp"] + sincos_fp + 3, guard["cmp"]  # guard, sin/cos, Clarke
     if geo:
         fp += 2 + 4 + 1 + 4 + 3  # psi_f (cos, sin), alpha-beta flux, U_dc dt, torque, |psi|^2
         fp += 4 if tables.delay_compensation else 0
@@ -33,20 +35,21 @@ def essential_ops(tables: Any) -> dict[str, dict[str, int]]:
     if tables.psi_ref != "constant":
         fp += 3 + 1  # flux reference from the torque reference (table slope) and its inverse
     if tables.uses_threshold:
-        fp += 3  # |T* - Te| <= eps
+        fp, cmp = fp + 2, cmp + 1  # |T* - Te| <= eps: difference, absolute value; compare
         if tables.n_sectors > 1:
-            fp += 6 + (1 if tables.n_conditions == 2 else 2)  # 12-sector test, condition signs
-    cost_fp = 7 + 1 + (1 if tables.cost != "rated" else 0)  # cost (+ the reference cost's weight), compare
+            fp += 2  # 12-sector test: x tan30, x tan60
+            cmp += 4 + (1 if tables.n_conditions == 2 else 2)  # half plane, sign of x, two angles; condition signs
+    cost_fp = 7 + (1 if tables.cost != "rated" else 0)  # cost (+ the reference cost's weight); then a compare
     if geo:
         per_cand_fp = 4 + 4 + 3 + cost_fp  # flux predictor, torque, |psi|^2
     else:
         per_cand_fp = 9 + 3 + 4 + 3 + cost_fp  # Euler current step, flux, torque, |psi|^2
     n_const = 14 + sincos_consts + SINCOS_TABLE_LOADS
     ops = {
-        "per_step": {"fp": fp, "sqrt": 1, "div": 0, "load": 6 + n_const + 1, "store": 14},
-        "per_candidate": {"fp": per_cand_fp, "sqrt": 1, "div": 0, "load": 3, "store": 2},
-        "per_member": {"fp": 0, "sqrt": 0, "div": 0, "load": 0, "store": 0},
+        "per_step": {"fp": fp, "cmp": cmp, "sqrt": 1, "div": 0, "load": 6 + n_const + 1, "store": 14},
+        "per_candidate": {"fp": per_cand_fp, "cmp": 1, "sqrt": 1, "div": 0, "load": 3, "store": 2},
+        "per_member": {"fp": 0, "cmp": 0, "sqrt": 0, "div": 0, "load": 0, "store": 0},
     }
     if tables.v0_first:  # V0 first in every row: its Te+ and |psi+| are the estimate's, only its cost is essential
-        ops["first_candidate"] = {"fp": cost_fp, "sqrt": 0, "div": 0, "load": 0, "store": 2}
+        ops["first_candidate"] = {"fp": cost_fp, "cmp": 1, "sqrt": 0, "div": 0, "load": 0, "store": 2}
     return ops
