@@ -131,11 +131,12 @@ class Topology(Protocol):
         ...
 
     def essential_ops(self, model: Model, tables: Any) -> dict[str, dict[str, int]]:
-        """The operations the step's algorithm cannot do without, for ``mpcgen bench``'s cycle bound:
+        """The operations the step's algorithm cannot do without, for ``mpcgen bench``'s cycle bounds:
         ``per_step``, ``per_candidate`` (times the output's ``n_eval``) and ``per_member`` (times the
         output's ``n_members`` where the record has it), optionally ``first_candidate`` (the first
-        evaluated candidate's, in place of ``per_candidate``), each ``{"fp", "sqrt", "div", "load",
-        "store"}`` counts."""
+        evaluated candidate's, in place of ``per_candidate``), each ``{"fp", "cmp", "sqrt", "div",
+        "load", "store"}`` counts (``fp``: FP operations that write a register; ``cmp``: compares and
+        branches)."""
         ...
 
     def export_tables(self, model: Model, path: Path, log: Log) -> str:

@@ -51,9 +51,8 @@ from codegen.errors import MpcgenError
 from codegen.model import Model
 from codegen.stages.fwdata import N_BENCH, evenly_spaced
 
-__all__ = ["MCA_ARGS", "CycleEstimate", "CycleError", "Elf", "StepTracer", "estimate_cycles", "model_bound", "op_totals",
-           "overlap_bound",
-           "mca_cycles", "llvm_mca", "strategy_cycles", "METHOD_NOTE"]
+__all__ = ["MCA_ARGS", "CycleEstimate", "CycleError", "Elf", "StepTracer", "check_bound", "estimate_cycles", "mca_cycles",
+           "llvm_mca", "model_bound", "op_totals", "overlap_bound", "strategy_cycles", "METHOD_NOTE"]
 
 #: llvm-mca's target: the board's core (thumbv7em, hard float, Cortex-M7 scheduling model)
 MCA_ARGS = ("-mtriple=thumbv7em-none-eabihf", "-mcpu=cortex-m7", "-iterations=1")
@@ -398,6 +397,15 @@ def model_bound(t: dict[str, np.ndarray], *, float_unit: bool = True) -> np.ndar
     return t["fp"] + MODEL_DIVIDER_CYCLES * (t["sqrt"] + t["div"]) + paired
 
 
+def check_bound(symbol: str, est_cycles: np.ndarray, bound: np.ndarray) -> None:
+    """Raise if any state's estimate is below its model bound: the essential operations would be
+    miscounted (a bound that is not a bound is an error, never a figure)."""
+    below = int(np.sum(np.asarray(est_cycles) < np.asarray(bound)))
+    if below:
+        raise CycleError(f"{symbol}: the estimate is below the model's lower bound for {below} of "
+                         f"{len(bound)} states: the essential operations are miscounted")
+
+
 def strategy_cycles(model: Model, tables: Any, elf_path: Path, *, n_bench: int = N_BENCH, max_states: int = 256) -> dict:
     """Estimate and bound of one strategy's image (``model`` the strategy's variant): the bench
     states the image embeds (the topology's trajectory, ``n_bench`` evenly spaced, in the step's
@@ -415,10 +423,7 @@ def strategy_cycles(model: Model, tables: Any, elf_path: Path, *, n_bench: int =
                        expected["n_members"][idx] if "n_members" in names else None)
     bound = model_bound(totals, float_unit=not tables.nf.quantised)
     overlap = overlap_bound(totals)
-    below = int(np.sum(est.cycles < bound))
-    if below:
-        raise CycleError(f"{model.prefix}_step: the estimate is below the model's lower bound for {below} of "
-                         f"{len(bound)} states: the essential operations are miscounted")
+    check_bound(f"{model.prefix}_step", est.cycles, bound)
     s = est.summary
     return {"min": s["min"], "median": s["median"], "max": s["max"], "mean": s["mean"],
             "path_instructions_median": s["instructions_median"], "states": s["states"], "paths": s["paths"],

@@ -97,6 +97,12 @@ def test_overlap_bound_lets_every_unit_overlap():
     assert cycles.overlap_bound(_totals(fp=5, load=20, store=4))[0] == 24  # memory
 
 
+def test_an_estimate_below_its_bound_is_an_error():
+    cycles.check_bound("x_step", np.array([100.0, 90.0]), np.array([80.0, 90.0]))  # at the bound: fine
+    with pytest.raises(cycles.CycleError, match="1 of 2 states"):
+        cycles.check_bound("x_step", np.array([100.0, 89.0]), np.array([80.0, 90.0]))
+
+
 def test_model_bound_adds_what_the_model_cannot_overlap():
     # FP writes alone, 13 cycles a square root, compares + memory two a cycle (one store a cycle)
     assert cycles.model_bound(_totals(fp=10, sqrt=2, cmp=3, load=5, store=2))[0] == 10 + 26 + 5
@@ -136,7 +142,7 @@ def test_model_bound_is_a_bound_of_the_model(seed):
     rng = np.random.default_rng(seed)
     counts = {"fp": int(rng.integers(5, 40)), "cmp": int(rng.integers(0, 12)), "sqrt": int(rng.integers(0, 4)),
               "div": int(rng.integers(0, 2)), "load": int(rng.integers(0, 30)), "store": int(rng.integers(0, 12))}
-    forms = {"fp": "\tvmul.f32\ts{d}, s30, s29", "cmp": "\tvcmp.f32\ts{d}, s29", "sqrt": "\tvsqrt.f32\ts{d}, s29",
+    forms = {"fp": "\tvmul.f32\ts{d}, s30, s29", "cmp": "\tvcmp.f32\ts28, s29", "sqrt": "\tvsqrt.f32\ts{d}, s29",
              "div": "\tvdiv.f32\ts{d}, s30, s29", "load": "\tvldr\ts{d}, [r0, #4]", "store": "\tstr\tr1, [r2, #8]"}
     kinds = [k for k, n in counts.items() for _ in range(n)]
     rng.shuffle(kinds)

@@ -1,5 +1,5 @@
 """Essential operations of the three-level MPDTC step, counted from its algorithm (``reference.py``),
-for the cycle lower bound of ``mpcgen bench --emulated`` (``codegen.stages.cycles.cycle_bound``).
+for the cycle lower bounds of ``mpcgen bench --emulated`` (``codegen.stages.cycles.op_totals``, ``model_bound``, ``overlap_bound``).
 
 Counts, not measurements: the FP operations that write a register, the
 compares and branches, square roots, divisions, loads and stores the
