@@ -132,11 +132,17 @@ class Topology(Protocol):
 
     def essential_ops(self, model: Model, tables: Any) -> dict[str, dict[str, int]]:
         """The operations the step's algorithm cannot do without, for ``mpcgen bench``'s cycle bounds:
-        ``per_step``, ``per_candidate`` (times the output's ``n_eval``) and ``per_member`` (times the
-        output's ``n_members`` where the record has it), optionally ``first_candidate`` (the first
-        evaluated candidate's, in place of ``per_candidate``), each ``{"fp", "cmp", "sqrt", "div",
-        "load", "store"}`` counts (``fp``: FP operations that write a register; ``cmp``: compares and
-        branches)."""
+        ``per_step``, ``per_candidate`` and any further units (``op_multiplicities`` says how often
+        each runs), optionally ``first_candidate`` (the first evaluated candidate's, in place of
+        ``per_candidate``), each ``{"fp", "cmp", "sqrt", "div", "load", "store"}`` counts (``fp``: FP
+        operations that write a register; ``cmp``: compares and branches)."""
+        ...
+
+    def op_multiplicities(self, model: Model, tables: Any, states: np.ndarray,
+                          expected: np.ndarray) -> dict[str, np.ndarray]:
+        """Per state of ``states`` (input records in the step's format; ``expected`` their output
+        records), how many times each unit of ``essential_ops`` other than ``per_step`` and
+        ``first_candidate`` runs; ``per_candidate`` is the evaluated candidates."""
         ...
 
     def export_tables(self, model: Model, path: Path, log: Log) -> str:

@@ -360,18 +360,21 @@ SQRT_CYCLES, DIV_CYCLES, ISSUE_WIDTH = 14, 16, 2
 MODEL_DIVIDER_CYCLES = 13
 
 
-def op_totals(ops: dict[str, dict[str, int]], n_eval: np.ndarray, n_members: np.ndarray | None = None
-              ) -> dict[str, np.ndarray]:
-    """Per state, each count of ``Topology.essential_ops`` for the whole step: per step + ``n_eval`` x
-    per candidate + ``n_members`` x per member; with a ``first_candidate`` entry the first evaluated
-    candidate counts that instead (e.g. a candidate whose prediction is the estimate itself)."""
-    n_eval = np.asarray(n_eval, dtype=np.float64)
-    n_mem = np.zeros_like(n_eval) if n_members is None else np.asarray(n_members, dtype=np.float64)
+def op_totals(ops: dict[str, dict[str, int]], mult: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """Per state, each count of ``Topology.essential_ops`` for the whole step: per step + for every
+    other unit its counts x its multiplicity (``mult``, ``Topology.op_multiplicities``: at least
+    ``per_candidate``, the evaluated candidates); with a ``first_candidate`` entry the first
+    evaluated candidate counts that instead (e.g. a candidate whose prediction is the estimate
+    itself).  A unit without a multiplicity, or a multiplicity without a unit, is an error."""
+    units = set(ops) - {"per_step", "first_candidate"}
+    if units != set(mult) or "per_candidate" not in units:
+        raise CycleError(f"essential operations {sorted(units)} and their multiplicities {sorted(mult)} differ")
+    n = {u: np.asarray(m, dtype=np.float64) for u, m in mult.items()}
+    n_first = np.minimum(n["per_candidate"], 1.0)
+    n["per_candidate"] = n["per_candidate"] - n_first
     first = ops.get("first_candidate", ops["per_candidate"])
-    n_first = np.minimum(n_eval, 1.0)
     return {key: (ops["per_step"].get(key, 0) + n_first * first.get(key, 0)
-                  + (n_eval - n_first) * ops["per_candidate"].get(key, 0)
-                  + n_mem * ops.get("per_member", {}).get(key, 0))
+                  + sum(n[u] * ops[u].get(key, 0) for u in sorted(units)))
             for key in ("fp", "cmp", "sqrt", "div", "load", "store")}
 
 
@@ -418,9 +421,8 @@ def strategy_cycles(model: Model, tables: Any, elf_path: Path, *, n_bench: int =
     expected = expected_outputs(topo, tables, states)
     est = estimate_cycles(elf_path, f"{model.prefix}_step", states, expected, max_states=max_states)
     idx = evenly_spaced(np.arange(len(states)), max_states)
-    names = expected.dtype.names or ()
-    totals = op_totals(topo.essential_ops(model, tables), expected["n_eval"][idx],
-                       expected["n_members"][idx] if "n_members" in names else None)
+    totals = op_totals(topo.essential_ops(model, tables),
+                       topo.op_multiplicities(model, tables, states[idx], expected[idx]))
     bound = model_bound(totals, float_unit=not tables.nf.quantised)
     overlap = overlap_bound(totals)
     check_bound(f"{model.prefix}_step", est.cycles, bound)

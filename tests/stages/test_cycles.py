@@ -83,12 +83,26 @@ def test_op_totals_per_step_candidate_member():
     ops = {"per_step": {"fp": 10, "cmp": 2, "sqrt": 0, "div": 0, "load": 4, "store": 0},
            "per_candidate": {"fp": 5, "cmp": 1, "sqrt": 1, "div": 0, "load": 2, "store": 0},
            "per_member": {"fp": 1, "cmp": 1, "sqrt": 0, "div": 0, "load": 2, "store": 0}}
-    t = cycles.op_totals(ops, np.array([0, 7]), np.array([0, 3]))
+    t = cycles.op_totals(ops, {"per_candidate": np.array([0, 7]), "per_member": np.array([0, 3])})
     assert list(t["fp"]) == [10, 10 + 35 + 3] and list(t["sqrt"]) == [0, 7] and list(t["load"]) == [4, 4 + 14 + 6]
+    # any further unit, times its own multiplicity (e.g. a division per unclamped T_N)
+    ops["per_unclamped"] = {"fp": 0, "cmp": 0, "sqrt": 0, "div": 1, "load": 0, "store": 0}
+    t = cycles.op_totals(ops, {"per_candidate": np.array([1, 7]), "per_member": np.array([1, 3]),
+                               "per_unclamped": np.array([0, 2])})
+    assert list(t["div"]) == [0, 2] and list(t["fp"]) == [10 + 5 + 1, 10 + 35 + 3]
+    del ops["per_unclamped"]
     # a first candidate without prediction (V0 of the flux-geometry step): its counts replace one candidate's
     ops["first_candidate"] = {"fp": 3, "cmp": 1, "sqrt": 0, "div": 0, "load": 0, "store": 0}
-    t = cycles.op_totals(ops, np.array([0, 1, 7]))
+    t = cycles.op_totals(ops, {"per_candidate": np.array([0, 1, 7]), "per_member": np.zeros(3)})
     assert list(t["fp"]) == [10, 13, 10 + 3 + 30] and list(t["sqrt"]) == [0, 0, 6]
+
+
+def test_op_totals_needs_a_multiplicity_for_every_unit():
+    ops = {"per_step": {"fp": 1}, "per_candidate": {"fp": 1}, "per_member": {"fp": 1}}
+    with pytest.raises(cycles.CycleError, match="multiplicities"):
+        cycles.op_totals(ops, {"per_candidate": np.array([1])})
+    with pytest.raises(cycles.CycleError, match="multiplicities"):
+        cycles.op_totals(ops, {"per_candidate": np.array([1]), "per_member": np.array([1]), "per_x": np.array([1])})
 
 
 def test_overlap_bound_lets_every_unit_overlap():

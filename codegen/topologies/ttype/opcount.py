@@ -4,9 +4,12 @@ for the cycle lower bounds of ``mpcgen bench --emulated`` (``codegen.stages.cycl
 Counts, not measurements: the FP operations that write a register, the
 compares and branches, square roots, divisions, loads and stores the
 algorithm cannot do without, per step, per evaluated voltage
-group (``n_eval``) and per resolved member (``n_members``: the redundant
-states' neutral-point test).  Virtual vectors' T_N division (63-MPDTC) is
-not counted (its number per step is not an output): the bound stays a bound.
+group (``n_eval``), per resolved member (``n_members``: the redundant
+states' neutral-point test), per virtual member (63-MPDTC: the
+neutral-point deadbeat's sums, numerator, clamps and charge) and per
+unclamped T_N (its division: a T_N clamped to T_N_min or Ts/3 is decided by
+signs and compares, so only a T_N strictly inside needs the quotient).
+``plugin.op_multiplicities`` gives each unit's count per state.
 """
 from __future__ import annotations
 
@@ -18,8 +21,9 @@ from codegen.topologies.ttype.records import GUARD
 
 
 def essential_ops(tables: Any) -> dict[str, dict[str, int]]:
-    """``{"per_step": counts, "per_candidate": counts, "per_member": counts}``, counts with keys
-    ``fp``, ``cmp``, ``sqrt``, ``div``, ``load``, ``store``."""
+    """``{"per_step": counts, "per_candidate": counts, "per_member": counts, "per_virtual_member":
+    counts, "per_unclamped": counts}``, counts with keys ``fp``, ``cmp``, ``sqrt``, ``div``, ``load``,
+    ``store``."""
     sincos_fp, sincos_consts = sincos_ops(tables.nf)  # one generated sin/cos in the step's format
     basic_only = tables.n_sectors == 1  # 27-MPDTC
     guard = guard_ops(GUARD)
@@ -39,4 +43,9 @@ def essential_ops(tables: Any) -> dict[str, dict[str, int]]:
                      "load": 6 + 30 + sincos_consts + 3 * SINCOS_TABLE_LOADS, "store": 20},
         "per_candidate": {"fp": 8 + 3 + 1 + 3 + 8, "cmp": 1, "sqrt": 1, "div": 0, "load": 4, "store": 2},
         "per_member": {"fp": per_member_fp, "cmp": 1, "sqrt": 0, "div": 0, "load": 2, "store": 0},
+        # a virtual member's deadbeat beyond a basic member's charge: A (2 adds), D, Ts/3 A and the
+        # numerator, T_N D and its sum in Q (the charge Ts i_o it replaces: -1); the zero-divisor
+        # test and the two clamps; two more segment patterns
+        "per_virtual_member": {"fp": 2 + 1 + 2 + 2 - 1, "cmp": 3, "sqrt": 0, "div": 0, "load": 2, "store": 0},
+        "per_unclamped": {"fp": 0, "cmp": 0, "sqrt": 0, "div": 1, "load": 0, "store": 0},
     }

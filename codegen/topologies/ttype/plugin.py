@@ -119,7 +119,16 @@ if TYPE_CHECKING:  # mypy checks this module against the protocol it implements
 
 
 def essential_ops(model: Model, tables: Any) -> dict[str, dict[str, int]]:
-    """Essential operations per step, per candidate and per member (``opcount``): the cycle bound."""
+    """Essential operations per step, per candidate, per member, per virtual member and per
+    unclamped T_N (``opcount``): the cycle bound."""
     from codegen.topologies.ttype import opcount
 
     return opcount.essential_ops(tables)
+
+
+def op_multiplicities(model: Model, tables: Any, states: np.ndarray, expected: np.ndarray) -> dict[str, np.ndarray]:
+    """Per state, how often each unit of ``essential_ops`` runs: the output's ``n_eval`` and
+    ``n_members``, and the reference's count of virtual members and of unclamped T_N."""
+    deadbeat = ref.deadbeat_counts(tables, states)
+    return {"per_candidate": expected["n_eval"], "per_member": expected["n_members"],
+            "per_virtual_member": deadbeat["virtual"], "per_unclamped": deadbeat["unclamped"]}

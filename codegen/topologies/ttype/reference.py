@@ -71,6 +71,16 @@ def step_batch(t: ThreeLevelTables, x: np.ndarray) -> np.ndarray:
     return run_batch(x, INPUT.bind(t.nf).dtype, lambda x: _step(t, x))
 
 
+def deadbeat_counts(t: ThreeLevelTables, x: np.ndarray) -> dict[str, np.ndarray]:
+    """Per record of ``x``: ``virtual``, the virtual members the step resolves (each a neutral-point
+    deadbeat, eq. (10)-(11)), and ``unclamped``, those whose T_N = num/D lies strictly inside
+    (T_N_min, Ts/3): the only ones whose T_N needs the quotient's value (a clamped T_N is
+    decided by signs and compares).  For the cycle bound's division count; no output changes."""
+    counts = {"virtual": np.zeros(len(x), np.intp), "unclamped": np.zeros(len(x), np.intp)}
+    run_batch(np.ascontiguousarray(x), INPUT.bind(t.nf).dtype, lambda x: _step(t, x, counts))
+    return counts
+
+
 class _Midpoint:
     """Neutral-point current and charge of a vector's segments (spec, eq. (2) corrected, (8)-(11))."""
 
@@ -117,7 +127,7 @@ class _Midpoint:
         return o.where(virt, q_v, q_b)
 
 
-def _step(t: ThreeLevelTables, x: np.ndarray) -> np.ndarray:
+def _step(t: ThreeLevelTables, x: np.ndarray, counts: dict[str, np.ndarray] | None = None) -> np.ndarray:
     # faulted lanes compute on zeros (their outputs are overwritten below)
     f = begin_step(t.nf, t.consts, x, guard(t, x), INPUT, output_record(t.max_groups))
     o, k, n, out, fault, ok, zf, inp = f.o, f.k, f.n, f.out, f.fault, f.ok, f.zero, f.inp
@@ -223,9 +233,14 @@ def _step(t: ThreeLevelTables, x: np.ndarray) -> np.ndarray:
                 # neutral-point deadbeat T_N = -(2C V_o(k+1) + Ts/3 A)/D, clamped to [T_N_min, Ts/3];
                 # the numerator as (-2C V_o(k+1)) - Ts/3 A, the same value (rounding is symmetric)
                 num = o.sub(neg_two_c_vo1, o.mul(k.TS3_S, sa))
-                tn = o.where(o.ne(d, zf), o.div(num, d), k.TN_MIN_S)
+                quotient = o.div(num, d)
+                tn = o.where(o.ne(d, zf), quotient, k.TN_MIN_S)
                 tn = o.where(o.lt(tn, k.TN_MIN_S), k.TN_MIN_S, tn)
                 tn = o.where(o.gt(tn, k.TS3_S), k.TS3_S, tn)
+                if counts is not None:  # deadbeat_counts: the lanes resolving this virtual member
+                    lane = active & m_act & virt & ok
+                    counts["virtual"] += lane
+                    counts["unclamped"] += lane & o.ne(d, zf) & o.lt(k.TN_MIN_S, quotient) & o.lt(quotient, k.TS3_S)
                 q = mid.charge(virt, o_n, sa, d, tn)
                 tn = o.where(virt, tn, zf)
             else:  # basic members only: the charge Ts i_o(s) of mid.charge, T_N = 0

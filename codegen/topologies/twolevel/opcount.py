@@ -20,7 +20,7 @@ from codegen.topologies.twolevel.records import GUARD
 
 
 def essential_ops(tables: Any) -> dict[str, dict[str, int]]:
-    """``{"per_step": counts, "per_candidate": counts, "per_member": counts}``, counts with keys
+    """``{"per_step": counts, "per_candidate": counts}`` (and ``first_candidate``), counts with keys
     ``fp``, ``cmp``, ``sqrt``, ``div``, ``load``, ``store``."""
     sincos_fp, sincos_consts = sincos_ops(tables.nf)  # one generated sin/cos in the step's format
     geo = tables.predictor == "flux-geometry"
@@ -48,7 +48,6 @@ def essential_ops(tables: Any) -> dict[str, dict[str, int]]:
     ops = {
         "per_step": {"fp": fp, "cmp": cmp, "sqrt": 1, "div": 0, "load": 6 + n_const + 1, "store": 14},
         "per_candidate": {"fp": per_cand_fp, "cmp": 1, "sqrt": 1, "div": 0, "load": 3, "store": 2},
-        "per_member": {"fp": 0, "cmp": 0, "sqrt": 0, "div": 0, "load": 0, "store": 0},
     }
     if tables.v0_first:  # V0 first in every row: its Te+ and |psi+| are the estimate's, only its cost is essential
         ops["first_candidate"] = {"fp": cost_fp, "cmp": 1, "sqrt": 0, "div": 0, "load": 0, "store": 2}

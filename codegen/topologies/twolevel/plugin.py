@@ -109,7 +109,12 @@ if TYPE_CHECKING:  # mypy checks this module against the protocol it implements
 
 
 def essential_ops(model: Model, tables: Any) -> dict[str, dict[str, int]]:
-    """Essential operations per step, per candidate and per member (``opcount``): the cycle bound."""
+    """Essential operations per step and per candidate (``opcount``): the cycle bound."""
     from codegen.topologies.twolevel import opcount
 
     return opcount.essential_ops(tables)
+
+
+def op_multiplicities(model: Model, tables: Any, states: np.ndarray, expected: np.ndarray) -> dict[str, np.ndarray]:
+    """Per state, how often each unit of ``essential_ops`` runs: the output's ``n_eval`` candidates."""
+    return {"per_candidate": expected["n_eval"]}

@@ -140,6 +140,30 @@ def test_63_evaluates_3_to_7_costs(built):
     assert np.array_equal(out["cost_best"], np.min(np.where(np.arange(slots) < out["n_eval"][:, None], out["costs"], np.inf), axis=1).astype(np.float32))
 
 
+def test_deadbeat_counts_are_the_rows_virtual_members(built):
+    """The cycle bound's multiplicities (plugin.op_multiplicities): every virtual member of the
+    step's row is counted, and a T_N counted unclamped only when its quotient is inside the range
+    (a virtual winner with T_N strictly inside (T_N_min, Ts/3) is one of them)."""
+    m, t, _lib = built
+    x = np.concatenate([random_states(m, 20_000, seed=7), adversarial_states(m, t, n_target=10_000, seed=8)])
+    out = reference.step_batch(t, x)
+    x, out = x[out["fault"] == 0], out[out["fault"] == 0]
+    mult = PLUGIN.op_multiplicities(m, t, x, out)
+    assert np.array_equal(mult["per_candidate"], out["n_eval"]) and np.array_equal(mult["per_member"], out["n_members"])
+    virtual, unclamped = mult["per_virtual_member"], mult["per_unclamped"]
+    if t.strategy == "mpdtc27":  # no virtual vectors
+        assert not virtual.any() and not unclamped.any()
+        return
+    rows = np.asarray(t.end_state)[x["prev_vector"]] * 12 + (out["sector"].astype(np.int64) - 1)
+    per_row = np.array([len(r) for r in (tuple(v for g in row for v in t.groups[g] if t.is_virtual[v])
+                                         for row in t.row_groups)])
+    assert np.array_equal(virtual, per_row[rows])
+    assert (unclamped <= virtual).all() and unclamped.any() and (unclamped < virtual).any()
+    inside = (out["vector"] >= vv.FIRST_VIRTUAL_ID) & (out["t_n_s"] > np.float32(t_n_min(m))) \
+        & (out["t_n_s"] < np.float32(m.controller.dt_s / 3.0))
+    assert inside.any() and (unclamped[inside] >= 1).all()
+
+
 def test_switching_constraint_t_n_and_segments(built):
     m, t, lib = built
     x, out = _decisions(m, t, lib)
