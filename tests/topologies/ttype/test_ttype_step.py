@@ -113,6 +113,16 @@ def _decisions(m, t, lib, n=60_000):
     return x[ok], out[ok]
 
 
+def _rows(t, x, out):
+    """Each step's candidate row: the state applied last x the sector of u* (63-MPDTC)."""
+    return np.asarray(t.end_state)[x["prev_vector"]] * 12 + (out["sector"].astype(np.int64) - 1)
+
+
+def _per_row(t, count):
+    """count(member vector id) summed over each row's groups' members, per row."""
+    return np.array([sum(count(v) for g in row for v in t.groups[g]) for row in t.row_groups])
+
+
 def test_63_evaluates_3_to_7_costs(built):
     m, t, lib = built
     x, out = _decisions(m, t, lib)
@@ -125,10 +135,9 @@ def test_63_evaluates_3_to_7_costs(built):
     assert (out["n_eval"] == out["n_groups"]).all()
     # every step evaluates its row's groups (row = state applied last x sector of u*) and resolves
     # every member of them; the states reach every row length of the table
-    rows = np.asarray(t.end_state)[x["prev_vector"]] * 12 + (out["sector"].astype(np.int64) - 1)
+    rows = _rows(t, x, out)
     assert np.array_equal(out["n_eval"], np.asarray(t.row_n)[rows])
-    members = np.array([sum(t.group_n[g] for g in t.row_groups[r]) for r in range(len(t.row_groups))])
-    assert np.array_equal(out["n_members"], members[rows])
+    assert np.array_equal(out["n_members"], _per_row(t, lambda v: 1)[rows])
     assert set(np.unique(out["n_eval"][normal]).tolist()) == {n for n in t.row_n if n >= 3}
     # the record holds as many slots as the longest row (7), costs beyond n_eval are zero;
     # the chosen candidate is the cheapest
@@ -154,10 +163,7 @@ def test_deadbeat_counts_are_the_rows_virtual_members(built):
     if t.strategy == "mpdtc27":  # no virtual vectors
         assert not virtual.any() and not unclamped.any()
         return
-    rows = np.asarray(t.end_state)[x["prev_vector"]] * 12 + (out["sector"].astype(np.int64) - 1)
-    per_row = np.array([len(r) for r in (tuple(v for g in row for v in t.groups[g] if t.is_virtual[v])
-                                         for row in t.row_groups)])
-    assert np.array_equal(virtual, per_row[rows])
+    assert np.array_equal(virtual, _per_row(t, lambda v: t.is_virtual[v])[_rows(t, x, out)])
     assert (unclamped <= virtual).all() and unclamped.any() and (unclamped < virtual).any()
     inside = (out["vector"] >= vv.FIRST_VIRTUAL_ID) & (out["t_n_s"] > np.float32(t_n_min(m))) \
         & (out["t_n_s"] < np.float32(m.controller.dt_s / 3.0))
