@@ -59,7 +59,36 @@ def test_step_has_no_struct_copy_and_inline_sincos(tmp_path, path, strategy):
                  "-q"]) == 0
     code = re.sub(r"/\*.*?\*/", "", next(tmp_path.glob("*_mpc.c")).read_text(), flags=re.S)
     assert "zero_out" not in code and "*out =" not in code
-    assert re.search(r"static inline void \w+_sincos3?\(", code)  # one angle, or three interleaved
+    # one angle, three interleaved, or (float32 s1-s3) one angle's reduction and finish
+    assert re.search(r"static inline void \w+_sincos(3|_reduce)?\(", code)
+
+
+def _step_body(code: str, prefix: str) -> str:
+    return code[code.index(f"void {prefix}_step("):]
+
+
+@pytest.mark.parametrize("strategy,fmt,ahead", [("s1", "float32", True), ("s3", "float32", True),
+                                                ("conventional", "float32", False), ("s1", "fixed", False)])
+def test_the_held_steps_arithmetic_runs_ahead_of_the_guard_only_in_float32(tmp_path, strategy, fmt, ahead):
+    """Float32 s1-s3: the sin/cos reduction, Clarke, L i and V dt come before the guard's branch (float
+    arithmetic is defined for every input); the table index only after it.  Fixed point (integer
+    arithmetic could overflow on an unguarded input) and conventional keep the guard first.  The s1-s3
+    evaluation is a function of its own, out of line under GCC and clang, in RAM on the F28377."""
+    assert main(["generate", str(SPMSM), "--strategy", strategy, "--number-format", fmt, "--target",
+                 "tms320f28377", "-o", str(tmp_path), "-q"]) == 0
+    code = re.sub(r"/\*.*?\*/", "", (tmp_path / "spmsm_mpc.c").read_text(), flags=re.S)
+    body = _step_body(code, "spmsm")
+    guard = body.index("fault = spmsm_guard(in);")
+    if ahead:
+        assert body.index("spmsm_sincos_reduce(in->theta_e_rad") < guard < body.index("spmsm_sincos_finish(")
+        assert body.index("vdt = ") < guard
+    else:
+        assert body.index("spmsm_sincos(in->theta_e_rad") > guard and "_sincos_reduce" not in code
+    held = strategy != "conventional"
+    assert ("spmsm_evaluate(in, out, row" in body) == held
+    assert ('#pragma CODE_SECTION(spmsm_evaluate, ".TI.ramfunc")' in code) == held
+    if held:
+        assert re.search(r"__attribute__\(\(noinline\)\)\s*#endif\s*static SPMSM_CODE void spmsm_evaluate\(", code)
 
 
 def test_firmware_makefile_unrolls_the_step_and_keeps_fp_contract_off(tmp_path):

@@ -129,7 +129,9 @@ class NumberFormat(Protocol):
 
     def template_values(self) -> dict[str, object]:
         """Values the format's macro library and the step templates read from the template context
-        (every format gives ``interleave``: the independent chains worth interleaving in a step)."""
+        (every format gives ``interleave``: the independent chains worth interleaving in a step, and
+        ``ahead_of_guard``: whether its arithmetic is defined for unguarded inputs, so that the step's
+        arithmetic needing no guarded value may run ahead of the input guard)."""
         ...
 
     def guard_bits(self, x: Any) -> str | None:

@@ -182,6 +182,7 @@ class Fixed:
     def template_values(self) -> dict[str, object]:
         sc = self._sc()
         return {"interleave": 1,  # the int64 helpers gain nothing from interleaved chains (more spills)
+                "ahead_of_guard": False,  # integer arithmetic on unguarded inputs could overflow
                 "q_frac_bits": sc.frac_bits,
                 "q_lits": {"0.5": self.literal(sc.const(0.5, "")),
                            "1": self.literal(sc.const(1.0, ""))}}

@@ -152,7 +152,9 @@ class Float32:
         return self
 
     def template_values(self) -> dict[str, object]:
-        return {"interleave": INTERLEAVE}
+        # float arithmetic is defined for every input (NaN and infinities propagate): the step's
+        # arithmetic that needs no guarded value runs ahead of the input guard, overlapping it
+        return {"interleave": INTERLEAVE, "ahead_of_guard": True}
 
     def for_step(self, signals: list[Any], base: Any, global_q: int | None) -> Float32:
         return self
