@@ -73,7 +73,7 @@ class TableRow:
 
 @functools.cache
 def environment(format_name: str | None = None) -> jinja2.Environment:
-    """The jinja2 environment: strict undefined, no autoescape, the C-float filter and, with a
+    """The jinja2 environment: strict undefined, no autoescape, the ``interleave`` filter and, with a
     number format's name, its ``real_literal`` filter (exact C literal of a value in the format).  One per
     format and process (jinja2 keeps the compiled templates, reloading a template whose file changed)."""
     env = jinja2.Environment(
@@ -82,9 +82,18 @@ def environment(format_name: str | None = None) -> jinja2.Environment:
         keep_trailing_newline=True,
         autoescape=False,
     )
+    env.filters["interleave"] = interleave_lines
     if format_name is not None:
         env.filters["real_literal"] = number_format(format_name).literal
     return env
+
+
+def interleave_lines(blocks: list[str]) -> list[str]:
+    """Independent statement lists, one statement a line, interleaved statement by statement (first
+    lines of every block, then second lines, ...; a shorter block drops out): the ``interleave``
+    filter, for chains the compiler should overlap.  Lines are stripped, empty ones dropped."""
+    lines = [[ln.strip() for ln in b.split("\n") if ln.strip()] for b in blocks]
+    return [ls[i] for i in range(max(map(len, lines), default=0)) for ls in lines if i < len(ls)]
 
 
 def base_context(model: Model, target: str) -> dict:

@@ -53,3 +53,11 @@ def test_number_format_spelled_through_macros() -> None:
         text = path.read_text()
         for word in ("float ", "sqrtf(", "fabsf(", "c_float", "0.0f", "ctype =="):
             assert word not in text, f"{path.name}: {word!r} belongs in templates/numfmt/<format>.j2"
+
+
+def test_interleave_filter_takes_statements_round_robin():
+    from codegen.render import environment, interleave_lines
+
+    assert interleave_lines(["a0;\n  a1;\n", "\nb0;", "c0;\nc1;\nc2;"]) == ["a0;", "b0;", "c0;", "a1;", "c1;", "c2;"]
+    assert interleave_lines([]) == []
+    assert environment().filters["interleave"] is interleave_lines
