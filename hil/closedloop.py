@@ -11,15 +11,15 @@ trace bit for bit; the harness also runs ``simulate``'s loop on the host and
 reports where the two traces first differ (``identical_to_simulate``).
 
 The metrics are the topology's ``simulate`` metrics of the board's trace.
-Anything topology-specific comes from the topology's ``sim`` module
-(``period_stepper``, ``trace_from``, ``trace_metrics``, ``DECISION_FIELD``).
+Anything topology-specific comes from the topology plugin's simulation facet
+(:class:`codegen.topology.Topology`: ``period_stepper``,
+``closed_loop_trace``, ``trace_from``, ``trace_metrics``,
+``decision_field``), reached through :func:`codegen.topology.topology_of`.
 """
 from __future__ import annotations
 
-import importlib
 import time
 from collections.abc import Callable
-from types import ModuleType
 from typing import Any
 
 import numpy as np
@@ -32,13 +32,7 @@ from .messages import split_results
 from .progress import Progress, cycle_stats
 from .session import Session
 
-__all__ = ["sim_module", "closed_loop", "trace_differences", "summary_line"]
-
-
-def sim_module(model: Model) -> ModuleType:
-    """The closed-loop simulator module (``sim``) beside the model's topology plugin."""
-    plugin = topology_of(model)
-    return importlib.import_module(plugin.__name__.rpartition(".")[0] + ".sim")  # type: ignore[attr-defined]
+__all__ = ["closed_loop", "trace_differences", "summary_line"]
 
 
 def trace_differences(a: dict[str, np.ndarray], b: dict[str, np.ndarray]) -> tuple[list[str], int | None]:
@@ -86,9 +80,8 @@ def closed_loop(session: Session, model: Model, tables: Any, *, show_progress: b
     schema = session.schema
     info = session.info if session.info is not None else session.handshake()
     topo = topology_of(model)
-    sim = sim_module(model)
     lib = topo.host_library(model, tables, with_sim=True)
-    stepper = sim.period_stepper(lib, model)
+    stepper = topo.period_stepper(lib, model)
     board = _Board(session)
     prog = Progress(f"hil closed-loop {model.name}", stepper.n, info.cycle_unit, enabled=show_progress)
     t0 = time.perf_counter()
@@ -108,12 +101,12 @@ def closed_loop(session: Session, model: Model, tables: Any, *, show_progress: b
     arrays = stepper.result()
 
     # the host's own closed loop (mpcgen simulate) over the same scenario, for the equality check
-    ref = sim.run_closed_loop(lib.ffi, lib.lib, model)
+    ref = topo.closed_loop_trace(model, lib)
     ref_arrays = {name: np.asarray(getattr(ref, name))[:stepper.k] for name in arrays}
     diff_fields, first = trace_differences(arrays, ref_arrays)
-    dec = sim.DECISION_FIELD
+    dec = topo.decision_field
     dec_equal = bool(np.array_equal(arrays[dec], ref_arrays[dec]))
-    metrics = sim.trace_metrics(sim.trace_from(arrays, model), model) if lost_at is None else None
+    metrics = topo.trace_metrics(topo.trace_from(arrays, model), model) if lost_at is None else None
     wire: dict[str, Any] = {"frames_sent": 0, "resent_states": 0, "duplicates": 0, "unexpected": 0, "resets": 0,
                             "board_errors": {}, "discarded": {}}
     for s in board.stats:
@@ -138,7 +131,6 @@ def closed_loop(session: Session, model: Model, tables: Any, *, show_progress: b
         "octets_out": board.octets_out, "octets_in": board.octets_in, "wire": wire,
     }
     return summary
-
 
 
 def summary_line(data: dict) -> str:

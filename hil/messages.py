@@ -9,7 +9,7 @@ from .schema import MAX_FRAME, MAX_STEPS, PROTOCOL_VERSION, Err, Schema, hash_wo
 
 __all__ = ["BoardInfo", "ErrorReport", "info_payload", "parse_info", "batch_payload", "step_payload",
            "parse_error", "split_results", "ProtocolError", "setpoints_payload", "parse_telemetry",
-           "parse_onboard_end", "OnboardEnd"]
+           "parse_run_end", "RunEnd"]
 
 
 class ProtocolError(Exception):
@@ -138,8 +138,8 @@ def parse_telemetry(schema: Schema, payload: bytes) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class OnboardEnd:
-    """The end of an on-board run (ONBOARD_END)."""
+class RunEnd:
+    """The end of an on-board run (RUN_END)."""
 
     periods: int
     samples: int
@@ -152,10 +152,10 @@ class OnboardEnd:
     hist_width: int
 
 
-def parse_onboard_end(schema: Schema, payload: bytes) -> OnboardEnd:
-    """An ONBOARD_END message's record."""
-    r = _one(schema, "onboard_end", payload)
-    return OnboardEnd(int(r["periods"]), int(r["samples"]), int(r["status"]), int(r["changes"]),
-                      int(r["cycles_min"]), int(r["cycles_max"]),
-                      sum(int(x) << (16 * i) for i, x in enumerate(r["cycles_sum"])),
-                      [int(x) for x in r["hist"]], int(r["hist_width"]))
+def parse_run_end(schema: Schema, payload: bytes) -> RunEnd:
+    """A RUN_END message's record."""
+    r = _one(schema, "run_end", payload)
+    return RunEnd(int(r["periods"]), int(r["samples"]), int(r["status"]), int(r["changes"]),
+                  int(r["cycles_min"]), int(r["cycles_max"]),
+                  sum(int(x) << (16 * i) for i, x in enumerate(r["cycles_sum"])),
+                  [int(x) for x in r["hist"]], int(r["hist_width"]))

@@ -26,8 +26,9 @@ from codegen.numfmt import number_format
 from codegen.records import Record, RecordLayout, fields
 from codegen.topology import topology_of
 
-__all__ = ["PROTOCOL_VERSION", "MAX_FRAME", "MAX_BATCH", "MAX_STEPS", "TELEMETRY_SAMPLES", "Msg", "Err", "HEADER_RECORDS", "Schema",
-           "hash_words", "words_hash", "text_words", "words_text"]
+__all__ = ["PROTOCOL_VERSION", "MAX_FRAME", "MAX_BATCH", "MAX_STEPS", "TELEMETRY_SAMPLES", "Msg", "Err", "HEADER_RECORDS",
+           "SAMPLE_TRACE_FIELDS", "telemetry_sample", "Schema", "hash_words", "words_hash", "text_words",
+           "words_text"]
 
 #: protocol version (bump on any change the schema hash does not see)
 PROTOCOL_VERSION = 1
@@ -54,7 +55,7 @@ class Msg(IntEnum):
     ERROR = 9   # board -> host, error record
     SETPOINTS = 10   # host -> board, setpoints record: run plant and controller on board (mode onboard)
     TELEMETRY = 11   # board -> host, telemetry head + count samples (seq: SETPOINTS seq + frame index + 1)
-    ONBOARD_END = 12  # board -> host, end-of-run record (seq of the SETPOINTS)
+    RUN_END = 12     # board -> host, end-of-run record of mode onboard (seq of the SETPOINTS)
 
 
 class Err(IntEnum):
@@ -113,17 +114,29 @@ SETPOINTS = Record("hil_setpoints", fields(f"""
 TELEMETRY_HEAD = Record("hil_telemetry_head", fields("""
     count  u16  1  number of samples that follow
 """))
-TELEMETRY_SAMPLE = Record("hil_sample", fields("""
-    k            i32  1  period index of the sample instant
-    omega_m      f32  1  plant mechanical speed, rad/s
-    te_nm        f32  1  plant torque, N*m
-    torque_ref   f32  1  T* given to the controller, N*m
-    ia_a         f32  1  plant phase current a, A
-    ib_a         f32  1  plant phase current b, A
-    decision     u16  1  the controller's decision (topology's decision field)
-    fault        u16  1  the controller's fault bits
-"""))
-ONBOARD_END = Record("hil_onboard_end", fields("""
+#: the TELEMETRY sample's fields at the sample instant, float32 on the wire; each named as the simulator's
+#: trace names it (codegen.simulator.records.SIM_TRACE): one name per signal in Python, C, JSON and on
+#: the wire
+SAMPLE_TRACE_FIELDS = fields("""
+    omega_m_rad_s  f32  1  plant mechanical speed, rad/s
+    te_nm          f32  1  plant torque, N*m
+    torque_ref_nm  f32  1  T* given to the controller, N*m
+    ia_a           f32  1  plant phase current a, A
+    ib_a           f32  1  plant phase current b, A
+""")
+
+
+def telemetry_sample(decision_field: str) -> Record:
+    """The TELEMETRY sample record: the period index, :data:`SAMPLE_TRACE_FIELDS`, the controller's decision
+    under the topology's name for it (``Topology.decision_field``, the output record's and the trace's)
+    and its fault bits."""
+    return Record("hil_sample", (
+        *fields("k  i32  1  period index of the sample instant"), *SAMPLE_TRACE_FIELDS,
+        *fields(f"{decision_field}  u16  1  the controller's decision (the topology's decision field)"),
+        *fields("fault  u16  1  the controller's fault bits")))
+
+
+RUN_END = Record("hil_run_end", fields("""
     periods      i32  1  periods run
     samples      i32  1  telemetry samples sent
     status       i32  1  0 ok, < 0 the plant diverged or a decision was invalid at period `periods`
@@ -134,8 +147,9 @@ ONBOARD_END = Record("hil_onboard_end", fields("""
     hist         i32  8  controller calls per cycle bin: bin b counts cycles in [b*w, (b+1)*w), last bin open
     hist_width   i32  1  bin width w (cycles)
 """))
+#: the header records every schema has (and the TELEMETRY sample, :func:`telemetry_sample`)
 HEADER_RECORDS: tuple[Record, ...] = (FRAME_HEAD, INFO, RESULT_HEAD, BATCH_HEAD, ERROR, SETPOINTS, TELEMETRY_HEAD,
-                                      TELEMETRY_SAMPLE, ONBOARD_END)
+                                      RUN_END)
 
 
 def hash_words(hex16: str) -> list[int]:
@@ -173,13 +187,16 @@ class Schema:
     output: RecordLayout
     config_hash: str
     number_format: str
+    #: the output record's (and the trace's) field holding the decision (``Topology.decision_field``)
+    decision_field: str
 
     @classmethod
     def of(cls, model: Model) -> Schema:
         """The schema of ``model``'s controller (its topology's records in its number format)."""
         topo = topology_of(model)
         nf = number_format(model.controller.number_format)
-        return cls(topo.input_record.bind(nf), topo.output_record(model).bind(nf), model.config_hash(), nf.name)
+        return cls(topo.input_record.bind(nf), topo.output_record(model).bind(nf), model.config_hash(), nf.name,
+                   topo.decision_field)
 
     def header(self, record: Record) -> RecordLayout:
         """A header record bound like the controller records."""
@@ -215,17 +232,17 @@ class Schema:
 
     @cached_property
     def sample(self) -> RecordLayout:
-        return self.header(TELEMETRY_SAMPLE)
+        return self.header(telemetry_sample(self.decision_field))
 
     @cached_property
-    def onboard_end(self) -> RecordLayout:
-        return self.header(ONBOARD_END)
+    def run_end(self) -> RecordLayout:
+        return self.header(RUN_END)
 
     @property
     def layouts(self) -> tuple[RecordLayout, ...]:
         """Every message layout, header records first."""
         return (self.head, self.info, self.result_head, self.batch_head, self.error, self.setpoints,
-                self.telemetry_head, self.sample, self.onboard_end, self.input, self.output)
+                self.telemetry_head, self.sample, self.run_end, self.input, self.output)
 
     @cached_property
     def schema_hash(self) -> str:

@@ -2,10 +2,18 @@
 
 A :class:`SimApi` names what a topology's simulator consists of: the
 parameter, state and trace structs (:mod:`codegen.simulator.records`), its
-C sources, and its plant header.  At build time :func:`header_path` renders
-``sim_api.h`` from the structs through ``templates/sim/sim_api.h.j2`` into
-the build cache, so the C structs, the cffi cdef and the numpy side all
-derive from the same field lists.
+C sources, its plant header and its part of the plant core.  At build time
+:func:`header_path` renders ``sim_api.h`` from the structs through
+``templates/sim/sim_api.h.j2`` into the build cache, so the C structs, the
+cffi cdef and the numpy side all derive from the same field lists.
+
+The plant core -- the dq motor, RK4, the inverter non-idealities, the speed
+PI, the controller's motor inputs (:data:`CORE_HEADERS`) and each
+topology's right-hand side (``SimApi.core``) -- is C written once on
+``sim_real_t`` (``csrc/sim_real.h``): the host simulator compiles it in
+float64, the firmware's on-board loop (the serial HIL's mode onboard) in
+float32 with the topology's ``SimApi.board`` sources; :func:`firmware_files`
+gives the firmware build those files.
 """
 from __future__ import annotations
 
@@ -20,13 +28,16 @@ from codegen import __version__
 from codegen.hostbuild import SimSources, cache_root
 from codegen.simulator.records import MOTOR_STATE, SIM_PARAMS, SIM_STATE, SIM_TRACE, SimStruct
 
-#: C sources of the shared dq model, RK4, speed PI, sensors, inverter non-idealities and period steps
-#: (float64, host only).
 CSRC = Path(__file__).resolve().parent / "csrc"
+#: The shared plant core, written once on sim_real_t: the real type, the dq model, RK4, the inverter
+#: non-idealities, the speed PI and the controller's motor inputs (host float64, on board float32).
+CORE_HEADERS: tuple[Path, ...] = (CSRC / "sim_real.h", CSRC / "pmsm_dq.h", CSRC / "pmsm_rk4.h",
+                                  CSRC / "sim_inverter.h", CSRC / "speed_pi.h", CSRC / "sim_motor_inputs.h")
+#: C sources of the host simulator's float64 entry points (dq model, speed PI), sensors and period
+#: steps (host only).
 SHARED_SOURCES: tuple[Path, ...] = (CSRC / "pmsm_dq.c", CSRC / "speed_pi.c", CSRC / "sim_sensors.c",
                                     CSRC / "sim_period.c")
-SHARED_HEADERS: tuple[Path, ...] = (CSRC / "pmsm_dq.h", CSRC / "pmsm_rk4.h", CSRC / "speed_pi.h",
-                                    CSRC / "sim_sensors.h", CSRC / "sim_inverter.h", CSRC / "sim_period.h")
+SHARED_HEADERS: tuple[Path, ...] = (*CORE_HEADERS, CSRC / "sim_sensors.h", CSRC / "sim_period.h")
 
 #: File name of the generated API header (the same for every topology: sim_period.h includes it).
 API_NAME = "sim_api.h"
@@ -42,6 +53,10 @@ class SimApi:
     trace: SimStruct
     csrc: Path  # the topology's csrc/ directory
     errors: dict[int, str]  # messages of the run's nonzero return codes
+    #: the topology's headers of the plant core (in csrc/, written once on sim_real_t)
+    core: tuple[str, ...] = ()
+    #: the topology's part of the firmware's on-board loop (in csrc/, float32; firmware/runtime/onboard.h)
+    board: tuple[str, ...] = ()
 
     @property
     def prefix(self) -> str:
@@ -60,6 +75,18 @@ class SimApi:
     def sources(self) -> tuple[Path, ...]:
         """Every C source of the simulator (shared first)."""
         return (*SHARED_SOURCES, self.csrc / f"{self.topology}_plant.c", self.loop_source)
+
+    @property
+    def core_headers(self) -> tuple[Path, ...]:
+        """The topology's headers of the plant core."""
+        return tuple(self.csrc / name for name in self.core)
+
+
+def firmware_files(api: SimApi) -> dict[str, str]:
+    """File name -> text of the on-board plant of ``api``'s topology: the plant core (shared and the
+    topology's, compiled in float32 there) and the topology's on-board sources."""
+    paths = (*CORE_HEADERS, *api.core_headers, *(api.csrc / name for name in api.board))
+    return {p.name: p.read_text() for p in paths}
 
 
 def hil_declarations(api: SimApi) -> str:
@@ -123,7 +150,7 @@ def sim_sources(api: SimApi):
     """The :class:`~codegen.hostbuild.SimSources` of a host build (renders the header)."""
 
     header = header_path(api)
-    headers = (*SHARED_HEADERS, api.plant_header, header)
+    headers = (*SHARED_HEADERS, *api.core_headers, api.plant_header, header)
     return SimSources(header, api.sources, headers)
 
 

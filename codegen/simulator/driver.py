@@ -6,9 +6,12 @@ the shared dq model, RK4, speed PI and period steps in ``csrc/`` here, and
 the generated controller step, compiled by the host build into one cffi
 library.  This module prepares the scenario arrays, fills the parameters
 every topology's simulator shares, calls ``<topology>_sim_run`` once per
-chunk of periods (so progress can be reported), carrying the C state across
-chunks so a chunked run equals one long run bit for bit, and builds each
-topology's ``Trace`` class from its trace field list.
+chunk of periods (:func:`run_chunked`, so progress can be reported),
+carrying the C state across chunks so a chunked run equals one long run bit
+for bit, or runs the same loop one period at a time with the decision given
+from outside (:class:`PeriodStepper`, the serial HIL's closed loop) -- both
+on one set-up (:class:`ClosedLoop`) -- and builds each topology's ``Trace``
+class from its trace field list.
 """
 from __future__ import annotations
 
@@ -20,9 +23,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from codegen.errors import MpcgenError
+from codegen.hostbuild import HostLib
 from codegen.model import Model
 from codegen.records import RecordLayout
-from codegen.simulator.api import SimApi
+from codegen.simulator.api import SimApi, firmware_files
 from codegen.simulator.records import SimStruct
 
 #: Largest RK4 sub-step (docs/simulation.md "Plant": at most 1 us).
@@ -31,6 +35,11 @@ MAX_SUBSTEP_S = 1e-6
 DEFAULT_CHUNK = 10_000
 
 RPM_TO_RAD_S = 2.0 * math.pi / 60.0
+
+
+def rpm_to_rad_s(speed_rpm: float) -> float:
+    """A plant's initial mechanical speed in rad/s: speed_rpm*2*pi/60, rounded in that order."""
+    return speed_rpm * 2.0 * math.pi / 60.0
 
 # Tolerance, in periods, when mapping a step time onto the sample grid
 # (a step at 2.0 s with dt = 50 us must act from sample 40000 exactly).
@@ -209,6 +218,67 @@ def _c_pointer(trace: SimStruct, name: str) -> str:
     return s.layout.c_type(s.record.field(name)) + " *"
 
 
+class ClosedLoop:
+    """The set-up every run of ``<api>_*`` shares, written once: the scenario arrays, the C state
+    initialised by ``<api>_init`` (the plant at ``initial_speed_rad_s``), one array per trace member
+    and the C trace struct pointing into them (:meth:`point_trace`).
+
+    ``run_chunked`` drives it chunk by chunk, :class:`PeriodStepper` period by period; both
+    return :meth:`result`.  Raises :class:`SimulationError` if ``<api>_init`` refuses the parameters.
+    """
+
+    def __init__(self, ffi: Any, lib: Any, api: SimApi, model: Model, params: Any,
+                 initial_speed_rad_s: float = 0.0) -> None:
+        self.ffi, self.lib, self.api, self.model, self.params = ffi, lib, api, model, params
+        self.speed_ref, self.load = scenario_arrays(model)
+        self.speed_ref.flags.writeable = False
+        self.n = int(self.speed_ref.shape[0])
+        self.fields = trace_fields(api.trace)
+        self.where = f"{model.source or model.name}"
+        self.state = ffi.new(f"{api.state.ctype} *")
+        if getattr(lib, f"{api.prefix}_init")(params, self.state) != 0:
+            raise SimulationError(f"{self.where}: {api.errors[-1]}")
+        self.state.common.motor.omega_m_rad_s = float(initial_speed_rad_s)
+        self.arrays: dict[str, np.ndarray] = {k: np.zeros(self.n * w, dtype=t) for k, (t, w) in self.fields.items()}
+        self.trace_c = ffi.new(f"{api.trace.ctype} *")
+        self._keep = []  # keep the buffers alive while C holds pointers into them
+        self._base = {}
+        for name, arr in self.arrays.items():
+            buf = ffi.from_buffer(arr, require_writable=True)
+            self._keep.append(buf)
+            self._base[name] = ffi.cast(_c_pointer(api.trace, name), buf)
+        self._holders = {name: self.trace_c if api.trace.owner(name) is api.trace else self.trace_c.common
+                         for name in self.fields}
+        self.point_trace(0)
+        #: periods done
+        self.k = 0
+
+    def point_trace(self, k0: int) -> None:
+        """Point every member of the C trace at period ``k0`` of its array."""
+        for name, ptr in self._base.items():
+            setattr(self._holders[name], name, ptr + k0 * self.fields[name][1])
+
+    def failure(self, rc: int, k: int) -> SimulationError:
+        """The error of return code ``rc`` of period ``k`` (``api.errors``)."""
+        reason = self.api.errors.get(rc, f"simulator error {rc}")
+        return SimulationError(f"{self.where}: closed-loop run stopped at period {k} "
+                               f"(t = {k * self.model.controller.dt_s:.6g} s): {reason}")
+
+    def result(self, periods: int | None = None) -> dict[str, np.ndarray]:
+        """The trace arrays of the first ``periods`` (default: the periods done), read-only, shape (m,) or
+        (m, w) for w values per period, plus ``load_nm``: the whole scenario's arrays themselves once every
+        period is done, else copies (a stepper may go on)."""
+        m = self.k if periods is None else min(periods, self.k)
+        out: dict[str, np.ndarray] = {}
+        for name, (_, w) in self.fields.items():
+            a = self.arrays[name] if m == self.n else self.arrays[name][:m * w].copy()
+            out[name] = a.reshape(m, w) if w > 1 else a
+        out["load_nm"] = self.load if m == self.n else self.load[:m].copy()
+        for arr in out.values():
+            arr.flags.writeable = False
+        return out
+
+
 def run_chunked(
     ffi: Any,
     lib: Any,
@@ -233,58 +303,25 @@ def run_chunked(
     """
     if chunk < 1:
         raise ValueError("chunk must be >= 1")
-    fields = trace_fields(api.trace)
-    speed_ref, load = scenario_arrays(model)
-    n = speed_ref.shape[0]
-    prefix = api.prefix
-    state = ffi.new(f"{api.state.ctype} *")
-    where = f"{model.source or model.name}"
-    if getattr(lib, f"{prefix}_init")(params, state) != 0:
-        raise SimulationError(f"{where}: {api.errors[-1]}")
-    state.common.motor.omega_m_rad_s = float(initial_speed_rad_s)
-    run = getattr(lib, f"{prefix}_run")
-
-    arrays: dict[str, np.ndarray] = {k: np.zeros(n * w, dtype=t) for k, (t, w) in fields.items()}
-    keep = []  # keep the buffers alive while C holds pointers into them
-    base = {}
-    for name, arr in arrays.items():
-        buf = ffi.from_buffer(arr, require_writable=True)
-        keep.append(buf)
-        base[name] = ffi.cast(_c_pointer(api.trace, name), buf)
-    ref_buf, load_buf = ffi.from_buffer(speed_ref), ffi.from_buffer(load)
+    loop = ClosedLoop(ffi, lib, api, model, params, initial_speed_rad_s)
+    run = getattr(lib, f"{api.prefix}_run")
+    ref_buf, load_buf = ffi.from_buffer(loop.speed_ref), ffi.from_buffer(loop.load)
     ref_ptr, load_ptr = ffi.cast("double *", ref_buf), ffi.cast("double *", load_buf)
-    trace_c = ffi.new(f"{api.trace.ctype} *")
-    holders = {name: trace_c if api.trace.owner(name) is api.trace else trace_c.common for name in fields}
-
-    k0 = 0
-    while k0 < n:
-        k1 = min(n, k0 + chunk)
-        for name, ptr in base.items():
-            setattr(holders[name], name, ptr + k0 * fields[name][1])
-        rc = run(params, ref_ptr + k0, load_ptr + k0, k1 - k0, trace_c, state)
+    n = loop.n
+    while loop.k < n:
+        k0, k1 = loop.k, min(n, loop.k + chunk)
+        loop.point_trace(k0)
+        rc = run(params, ref_ptr + k0, load_ptr + k0, k1 - k0, loop.trace_c, loop.state)
         if rc != 0:
-            k_fail = int(state.common.k)
-            reason = api.errors.get(rc, f"simulator error {rc}")
-            raise SimulationError(
-                f"{where}: closed-loop run stopped at period {k_fail} "
-                f"(t = {k_fail * model.controller.dt_s:.6g} s): {reason}"
-            )
-        k0 = k1
+            raise loop.failure(rc, int(loop.state.common.k))
+        loop.k = k1
         if progress is not None:
             progress(k1 / n)
-    del keep, ref_buf, load_buf
-
-    for name, (_, w) in fields.items():
-        if w > 1:
-            arrays[name] = arrays[name].reshape(n, w)
-    arrays["load_nm"] = load
-    for arr in arrays.values():
-        arr.flags.writeable = False
-    speed_ref.flags.writeable = False
-    return arrays
+    del ref_buf, load_buf
+    return loop.result()
 
 
-class PeriodStepper:
+class PeriodStepper(ClosedLoop):
     """The closed loop of ``run_chunked``, one period at a time, with the decision given from outside.
 
     For a controller computed elsewhere (the serial HIL's closed loop, where a
@@ -299,31 +336,14 @@ class PeriodStepper:
 
     def __init__(self, ffi: Any, lib: Any, api: SimApi, model: Model, params: Any, in_dtype: np.dtype,
                  out_dtype: np.dtype, initial_speed_rad_s: float = 0.0) -> None:
-        self.ffi, self.lib, self.api, self.model, self.params = ffi, lib, api, model, params
+        super().__init__(ffi, lib, api, model, params, initial_speed_rad_s)
         self.in_dtype, self.out_dtype = np.dtype(in_dtype), np.dtype(out_dtype)
-        self.speed_ref, self.load = scenario_arrays(model)
-        self.n = int(self.speed_ref.shape[0])
-        self.fields = trace_fields(api.trace)
-        self.state = ffi.new(f"{api.state.ctype} *")
-        self.where = f"{model.source or model.name}"
-        if getattr(lib, f"{api.prefix}_init")(params, self.state) != 0:
-            raise SimulationError(f"{self.where}: {api.errors[-1]}")
-        self.state.common.motor.omega_m_rad_s = float(initial_speed_rad_s)
         self._input = getattr(lib, f"{api.prefix}_hil_input")
         self._finish = getattr(lib, f"{api.prefix}_hil_finish")
-        self.arrays: dict[str, np.ndarray] = {k: np.zeros(self.n * w, dtype=t) for k, (t, w) in self.fields.items()}
-        self._keep = []
-        self.trace_c = ffi.new(f"{api.trace.ctype} *")
-        for name, arr in self.arrays.items():
-            buf = ffi.from_buffer(arr, require_writable=True)
-            self._keep.append(buf)
-            holder = self.trace_c if api.trace.owner(name) is api.trace else self.trace_c.common
-            setattr(holder, name, ffi.cast(_c_pointer(api.trace, name), buf))
         self._in = np.zeros(1, self.in_dtype)
         self._out = np.zeros(1, self.out_dtype)
         self._in_buf = ffi.from_buffer(self._in, require_writable=True)
         self._out_buf = ffi.from_buffer(self._out, require_writable=True)
-        self.k = 0
 
     def input(self) -> np.ndarray:
         """The controller input of period ``k`` (a length-1 record array, valid until the next call)."""
@@ -341,19 +361,47 @@ class PeriodStepper:
         rc = self._finish(self.params, self.state, float(self.speed_ref[k]), float(self.load[k]), self._out_buf,
                           self.trace_c, k)
         if rc != 0:
-            reason = self.api.errors.get(rc, f"simulator error {rc}")
-            raise SimulationError(f"{self.where}: closed-loop run stopped at period {k} "
-                                  f"(t = {k * self.model.controller.dt_s:.6g} s): {reason}")
+            raise self.failure(rc, k)
         self.k = k + 1
 
-    def result(self, periods: int | None = None) -> dict[str, np.ndarray]:
-        """The trace arrays of the first ``periods`` (default: the periods done), as ``run_chunked`` returns them."""
-        m = self.k if periods is None else min(periods, self.k)
-        out: dict[str, np.ndarray] = {}
-        for name, (_, w) in self.fields.items():
-            a = self.arrays[name][:m * w].copy()
-            out[name] = a.reshape(m, w) if w > 1 else a
-        out["load_nm"] = self.load[:m].copy()
-        for arr in out.values():
-            arr.flags.writeable = False
-        return out
+
+@dataclasses.dataclass(frozen=True)
+class Simulator:
+    """One topology's closed-loop simulator, the runs its plugin's simulation facet offers
+    (:class:`codegen.topology.Topology`), written once: its C API, how a model fills its parameters
+    (``params_from_model(ffi, model, substep_max_s)``, RK4 sub-steps of at most ``substep_max_s``, None:
+    :data:`MAX_SUBSTEP_S`) and how trace arrays become its ``Trace`` (``trace_from(arrays, model)``)."""
+
+    api: SimApi
+    params_from_model: Callable[[Any, Model, float | None], Any]
+    trace_from: Callable[[dict[str, np.ndarray], Model], Any]
+
+    def run(self, ffi: Any, lib: Any, model: Model, progress: Callable[[float], None] | None = None, *,
+            chunk: int = DEFAULT_CHUNK, substep_max_s: float | None = None, initial_speed_rpm: float = 0.0) -> Any:
+        """Run the model's scenario through the compiled loop (``(ffi, lib)``: a cffi library holding
+        ``<api>_init``/``<api>_run`` built with the controller for ``model``), the plant starting at
+        ``initial_speed_rpm``; return the ``Trace``.  ``progress`` is called after every chunk with the
+        completed fraction.  Raises :class:`SimulationError` on refused parameters or divergence."""
+        params = self.params_from_model(ffi, model, substep_max_s)
+        arrays = run_chunked(ffi, lib, self.api, model, params, progress, chunk,
+                             initial_speed_rad_s=rpm_to_rad_s(initial_speed_rpm))
+        return self.trace_from(arrays, model)
+
+    def closed_loop_trace(self, model: Model, lib: HostLib) -> Any:
+        """The ``Trace`` of the model's scenario through ``lib`` (built with the simulator): ``mpcgen
+        simulate``'s run."""
+        return self.run(lib.ffi, lib.lib, model)
+
+    def period_stepper(self, lib: HostLib, model: Model, *, substep_max_s: float | None = None,
+                       initial_speed_rpm: float = 0.0) -> PeriodStepper:
+        """The closed loop of :meth:`run` one period at a time, the decision given from outside (``lib``:
+        built with the simulator; its ffi, library and the step's records)."""
+        return PeriodStepper(lib.ffi, lib.lib, self.api, model, self.params_from_model(lib.ffi, model, substep_max_s),
+                             lib.records.input.dtype, lib.records.output.dtype,
+                             initial_speed_rad_s=rpm_to_rad_s(initial_speed_rpm))
+
+    def firmware_plant(self, model: Model) -> dict[str, str]:
+        """File name -> text of the on-board plant (the serial HIL's mode onboard): the plant core, compiled
+        there in float32, and the topology's part of firmware/runtime/onboard.h's loop
+        (:func:`codegen.simulator.api.firmware_files`)."""
+        return firmware_files(self.api)

@@ -126,11 +126,11 @@ static void emit_telemetry(const hil_sample_t *samples, uint16_t n)
 }
 
 /* SETPOINTS: run plant and controller on board (onboard.h), TELEMETRY frames
- * (seq + 1, seq + 2, ...), then ONBOARD_END (seq). */
+ * (seq + 1, seq + 2, ...), then RUN_END (seq). */
 static void handle_setpoints(const uint16_t *p, uint16_t n, uint16_t seq)
 {
     static hil_setpoints_t sp;
-    static hil_onboard_end_t end;
+    static hil_run_end_t end;
     uint16_t bad;
     if (n != HIL_SETPOINTS_OCTETS) {
         send_error(HIL_ERR_LENGTH, seq, n);
@@ -144,8 +144,8 @@ static void handle_setpoints(const uint16_t *p, uint16_t n, uint16_t seq)
     }
     telemetry_seq = (uint16_t)(seq + 1u);
     onboard_run(&sp, overhead, emit_telemetry, &end);
-    hil_encode_onboard_end(&end, &tx[HIL_HEAD]);
-    send_frame(HIL_MSG_ONBOARD_END, seq, HIL_ONBOARD_END_OCTETS);
+    hil_encode_run_end(&end, &tx[HIL_HEAD]);
+    send_frame(HIL_MSG_RUN_END, seq, HIL_RUN_END_OCTETS);
 }
 
 static void restart(void)

@@ -16,7 +16,7 @@
  * (seq, seq + 1, ...), PING -> PONG (same payload), RESET -> INFO (the
  * protocol state restarts), SETPOINTS -> an on-board run of plant and
  * controller (onboard.h): TELEMETRY frames (seq + 1, seq + 2, ...), then
- * ONBOARD_END (seq); input is not read during the run.  INFO is also sent
+ * RUN_END (seq); input is not read during the run.  INFO is also sent
  * once at start-up (seq 0).
  * Cycles: only the controller call is timed (mpc_timed_step), the
  * measurement overhead (mpc_overhead) subtracted.

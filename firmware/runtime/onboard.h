@@ -2,22 +2,21 @@
  * onboard.h -- mode onboard of the serial HIL protocol (HIL builds): the
  * board runs a float32 plant AND the controller at full rate on a
  * piecewise-constant speed/load profile (SETPOINTS) and sends decimated
- * samples (TELEMETRY) and cycle statistics (ONBOARD_END).
+ * samples (TELEMETRY) and cycle statistics (RUN_END).
  *
- * The plant (onboard.c): the dq PMSM of codegen/simulator/csrc/pmsm_dq.h in
- * float32 (Rs, Ld, Lq, psi_f, p, J, B from the generated onboard_config.h),
- * classic RK4 with ONB_SUBSTEPS sub-steps per control period (a 7-segment
- * period: every segment in sub-steps of at most ONB_DT/ONB_SUBSTEPS), the
- * stage angle rotated from one sinf/cosf pair per sub-step; the speed PI in
- * float32 with the host's conditional-integration anti-windup (speed_pi.c);
- * sampling at the start of each period as the host simulator does.
- *
- * The inverter voltage is u_alpha = ua0 + ua1*V_o, u_beta = ub0 + ub1*V_o
- * and the neutral point dV_o/dt = ka*i_alpha + kb*i_beta (two capacitors C,
- * ka and kb already divided by 2C; all four 0 for a two-level inverter).
- * What differs per topology (the controller's extra inputs, how a decision
- * becomes voltage segments, the timing rule) is in onboard_<topology>.c,
- * the one file of the build that implements the onb_topo_* functions below.
+ * The plant is the host simulator's, written once on sim_real_t
+ * (codegen/simulator/csrc/sim_real.h) and compiled here in float32: the dq
+ * motor (pmsm_dq.h), classic RK4 (pmsm_rk4.h) in sub-steps of at most
+ * ONB_SUBSTEP_MAX_S, the speed PI (speed_pi.h), the controller's motor
+ * inputs (sim_motor_inputs.h) and the topology's right-hand side
+ * (<topology>_rhs.h); sampling at the start of each period as the host
+ * simulator does, the decision of period k acting during [t_k+d, t_k+d+1)
+ * with d = ONB_DELAY_PERIODS, the simulator's actuation delay
+ * (codegen.model.Plant.delay_periods).  No inverter or sensor
+ * non-idealities.  The constants (motor, DC link, speed loop, timing) are
+ * the generated plant_config.h's, the plant core's files and the topology's
+ * part (the onb_topo_* functions below) come with the topology
+ * (Topology.firmware_plant).
  *
  * The controller's real inputs and outputs are reached through the generated
  * MPC_ENCODE_<field> / MPC_DECODE_<field> of mpc_binding.h (SI value <-> the
@@ -30,21 +29,25 @@
 #ifndef ONBOARD_H
 #define ONBOARD_H
 
+/* the plant core in float32 (sim_real.h): before any of its headers */
+#ifndef SIM_REAL_F32
+#define SIM_REAL_F32 1
+#endif
+#include "sim_real.h"
+#if !SIM_REAL_IS_F32
+#error "onboard.h: the plant core was included in float64 before onboard.h"
+#endif
+
 #include <stdint.h>
 
 #include "hil_codec.h"
 #include "mpc_binding.h"
 
-/* Plant state: i_d, i_q (A), omega_m (rad/s), theta_e (rad, [0, 2*pi)), V_o (V). */
+/* Plant state: i_d, i_q (A), omega_m (rad/s), theta_e (rad, [0, 2*pi) at the sample instant), V_o (V;
+ * 0 for a two-level inverter). */
 typedef struct {
-    float x[5];
+    sim_real_t x[5];
 } onb_plant_t;
-
-/* One constant-voltage interval (see above). */
-typedef struct {
-    float ua0, ua1, ub0, ub1, ka, kb;
-    uint16_t zero; /* 1: u = 0 and no neutral-point current (no Park rotation) */
-} onb_segment_t;
 
 /* Called with every full block of samples (and the last, shorter one). */
 typedef void (*onb_emit_fn)(const hil_sample_t *samples, uint16_t n);
@@ -53,18 +56,15 @@ typedef void (*onb_emit_fn)(const hil_sample_t *samples, uint16_t n);
 uint16_t onboard_check(const hil_setpoints_t *sp);
 
 /* Run the profile from rest (plant, PI, topology state reset); fill *end. */
-void onboard_run(const hil_setpoints_t *sp, uint32_t overhead, onb_emit_fn emit, hil_onboard_end_t *end);
+void onboard_run(const hil_setpoints_t *sp, uint32_t overhead, onb_emit_fn emit, hil_run_end_t *end);
 
-/* Integrate the plant over dt_s (> 0) in `substeps` RK4 sub-steps of the segment's voltage. */
-void onb_advance(onb_plant_t *p, const onb_segment_t *seg, float load_nm, float dt_s, uint16_t substeps);
-
-/* The topology's part (onboard_<topology>.c). */
+/* The topology's part (its firmware plant file): reset its decision queue (the inverter idle before the
+ * first decisions). */
 void onb_topo_reset(void);
 /* The topology's controller inputs at the sample instant. */
 void onb_topo_input(const onb_plant_t *p, mpc_input_t *in);
-/* The decision (telemetry, change count). */
-uint16_t onb_topo_decision(const mpc_output_t *out);
-/* Apply the period [t_k, t_k+1) with the decision `out` (its timing rule); 0, or -3 for an invalid decision. */
-int16_t onb_topo_apply(onb_plant_t *p, const mpc_output_t *out, float load_nm);
+/* Take the decision `out` and integrate the period [t_k, t_k+1) with the one acting then (the decision of
+ * k - ONB_DELAY_PERIODS), the angle wrapped at the end; 0, or -3 for an invalid decision. */
+int16_t onb_topo_apply(onb_plant_t *p, const mpc_output_t *out, sim_real_t load_nm);
 
 #endif /* ONBOARD_H */

@@ -16,9 +16,10 @@ from hil_support import SPMSM, TLEVEL, run_mode
 from codegen.config import load_config
 from codegen.model import Model
 from codegen.results import clean_json
+from codegen.stages.training import with_trained_tables
 from codegen.topology import topology_of
 from hil.cli import main
-from hil.closedloop import closed_loop, sim_module, trace_differences
+from hil.closedloop import closed_loop, trace_differences
 from hil.messages import BoardInfo
 from hil.schema import Schema
 from hil.session import RunResult, RunStats
@@ -35,14 +36,14 @@ IDS = [f"{c.stem}-{s}" + ("-fixed" if o.get("controller.number_format") == "fixe
 
 
 def model_of(config, strategy: str, overrides: dict) -> tuple[Model, object]:
-    m = load_config(config, {"controller.strategy": strategy, **overrides})
+    m = with_trained_tables(load_config(config, {"controller.strategy": strategy, **overrides}), [strategy])
     return m, topology_of(m).derive(m)
 
 
 def simulate(m: Model, t: object):
     """``mpcgen simulate``'s run of the scenario (the compiled closed loop)."""
-    lib = topology_of(m).host_library(m, t, with_sim=True)
-    return sim_module(m).run_closed_loop(lib.ffi, lib.lib, m)
+    topo = topology_of(m)
+    return topo.closed_loop_trace(m, topo.host_library(m, t, with_sim=True))
 
 
 @pytest.mark.board
@@ -51,16 +52,16 @@ def test_closed_loop_equals_simulate(board, config, strategy, overrides):
     m, t = model_of(config, strategy, overrides)
     data = run_mode(board, closed_loop, m, t)
     ref = simulate(m, t)
-    sim = sim_module(m)
+    topo = topology_of(m)
     assert data["periods"] == data["periods_done"] == ref.n >= 4000
     assert data["lost_at"] is None and data["ok"]
     # the decision sequence, period by period, as the board gave it == mpcgen simulate's
-    assert data["decision_field"] == sim.DECISION_FIELD
-    assert data["decisions"] == getattr(ref, sim.DECISION_FIELD).astype(int).tolist()
+    assert data["decision_field"] == topo.decision_field
+    assert data["decisions"] == getattr(ref, topo.decision_field).astype(int).tolist()
     assert data["identical_to_simulate"] and data["differing_trace_fields"] == []
     assert len(set(data["decisions"])) > 3  # the run switches
     # simulate's metrics of the same trace
-    assert data["metrics"] == clean_json(sim.trace_metrics(ref, m))
+    assert data["metrics"] == clean_json(topo.trace_metrics(ref, m))
     assert data["cycles_min"] is not None and data["wire"]["resent_states"] == 0
 
 
@@ -73,7 +74,7 @@ class _WrongBoard:
         self.info = BoardInfo(1, self.schema.schema_hash, self.schema.config_hash, 0, 0, 32, 1024, "fake", "float32",
                               "ns")
         self.k, self.bad = 0, bad_period
-        self.field = sim_module(m).DECISION_FIELD
+        self.field = topology_of(m).decision_field
 
     def run(self, rec: np.ndarray) -> RunResult:
         out = self.lib.step_batch(rec)

@@ -17,6 +17,7 @@ from hil_support import SPMSM, TLEVEL, run_mode
 
 from codegen.config import load_config
 from codegen.simulator.driver import scenario_arrays
+from codegen.stages.training import with_trained_tables
 from codegen.topology import topology_of
 from hil.boards import open_board
 from hil.cli import main
@@ -41,7 +42,7 @@ IDS = [f"{c.stem}-{s}" + ("-fixed" if o.get("controller.number_format") == "fixe
 
 
 def model_of(config, strategy: str, overrides: dict):
-    m = load_config(config, {"controller.strategy": strategy, **overrides})
+    m = with_trained_tables(load_config(config, {"controller.strategy": strategy, **overrides}), [strategy])
     return m, topology_of(m).derive(m)
 
 

@@ -13,6 +13,7 @@ from codegen.hostbuild import STRICT_CFLAGS
 from codegen.records import Field, Record
 from codegen.stages import firmware
 from codegen.stages.firmware import ARM_CFLAGS
+from codegen.topology import topology_of
 from hil import schema as sch
 from hil.codecgen import protocol_build
 from hil.messages import info_payload, parse_info
@@ -62,22 +63,33 @@ def test_info_round_trip_and_hash_words():
     assert s.max_batch * s.input_octets + 10 <= sch.MAX_FRAME and s.result_octets + 8 <= sch.MAX_FRAME
 
 
-@pytest.fixture(scope="module", params=["stm32h743", "tms320f28377"])
-def project(request, tmp_path_factory) -> tuple[str, Path]:
-    m, t = example("tlevel", "mpdtc27")
-    out = tmp_path_factory.mktemp(request.param)
-    firmware.write_firmware_project(m, t, request.param, out, 16, n_bench=0, protocol=protocol_build(m))
-    return request.param, out
+PROJECTS = [("stm32h743", "tlevel", "mpdtc27"), ("tms320f28377", "tlevel", "mpdtc27"),
+            ("tms320f28377", "spmsm", "conventional")]
+
+
+@pytest.fixture(scope="module", params=PROJECTS, ids=[f"{b}-{c}" for b, c, _ in PROJECTS])
+def project(request, tmp_path_factory) -> tuple[str, Path, list[str]]:
+    """A protocol project and its on-board loop's C: onboard.c and the topology's on-board plant sources."""
+    board, config, strategy = request.param
+    m, t = example(config, strategy)
+    out = tmp_path_factory.mktemp(board)
+    firmware.write_firmware_project(m, t, board, out, 16, n_bench=0, protocol=protocol_build(m))
+    plant_c = [f"firmware/runtime/{name}" for name in topology_of(m).firmware_plant(m) if name.endswith(".c")]
+    assert plant_c and all((out / src).is_file() for src in plant_c)
+    return board, out, ["firmware/runtime/onboard.c", *plant_c]
 
 
 def test_protocol_c_compiles_strictly(project):
-    board, out = project
+    """The protocol's C and the on-board loop's (the plant core in float32), with the board's flags: the
+    Arm ones (-Wdouble-promotion: no float literal or value promoted to double), or the C28x type model
+    (double poisoned)."""
+    board, out, onboard_c = project
     incs = [f"-I{out / d}" for d in ("gen", "firmware/runtime", f"firmware/ports/{board}")]
     if board == "stm32h743":
         cc = ["arm-none-eabi-gcc", *ARM_CFLAGS]
     else:
         cc = ["gcc", *STRICT_CFLAGS, *C28X_FLAGS]
-    for src in PROTOCOL_C:
+    for src in (*PROTOCOL_C, *onboard_c):
         r = subprocess.run([*cc, "-DMPC_HIL", *incs, "-c", str(out / src), "-o", "/dev/null"],
                            capture_output=True, text=True, cwd=out)  # -fstack-usage files land in the project
         assert r.returncode == 0, f"{board} {src}:\n{r.stderr}"
@@ -85,10 +97,10 @@ def test_protocol_c_compiles_strictly(project):
 
 
 def test_protocol_c_has_no_8bit_types_double_or_byte_pointers(project):
-    _, out = project
+    _, out, onboard_c = project
     bad = re.compile(r"\bu?int8_t\b|\bdouble\b|\bchar\s*\*\s*\)")
-    for src in [*PROTOCOL_C, "gen/hil_codec.h", "firmware/runtime/hil_proto.h", "firmware/runtime/hil_cobs.h",
-                "firmware/runtime/hil_wire.h"]:
+    for src in [*PROTOCOL_C, *onboard_c, "gen/hil_codec.h", "gen/plant_config.h", "firmware/runtime/hil_proto.h",
+                "firmware/runtime/hil_cobs.h", "firmware/runtime/hil_wire.h", "firmware/runtime/onboard.h"]:
         code = re.sub(r"/\*.*?\*/", " ", (out / src).read_text(), flags=re.S)
         assert not bad.search(code), src
 

@@ -36,7 +36,7 @@ def test_stepper_equals_run_with_a_nonideal_plant(name, strategy, sim, short, d)
     topo = topology_of(model)
     lib = topo.host_library(model, topo.derive(model), with_sim=True)
     run = sim.run_closed_loop(lib.ffi, lib.lib, model)
-    stepper = sim.period_stepper(lib, model)
+    stepper = topo.period_stepper(lib, model)  # the simulation facet's
     for _ in range(stepper.n):
         first = stepper.input().copy()
         rec = stepper.input()  # reading the input changes nothing

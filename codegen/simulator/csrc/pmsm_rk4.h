@@ -1,6 +1,7 @@
 /*
  * pmsm_rk4.h -- classic 4th-order Runge-Kutta over one constant-voltage
- * interval, shared by every topology's plant (hand-written runtime, float64).
+ * interval, shared by every topology's plant (hand-written runtime, written
+ * once on sim_real_t: float64 on the host, float32 on board, sim_real.h).
  *
  * Specification: docs/simulation.md "Integration" (RK4 with
  * sub-steps of at most 1 us).  The state is a vector x[0..nx-1] whose first
@@ -18,7 +19,7 @@
  * integrated unwrapped (the caller wraps).
  *
  * static inline: each plant's call inlines it with its own right-hand side,
- * so the double operations are those of a hand-written loop, in the same
+ * so the operations are those of a hand-written loop, in the same
  * order (bit-identical results under -ffp-contract=off).
  *
  * C99, no dynamic memory, no global state.  Not part of any cffi cdef.
@@ -26,9 +27,8 @@
 #ifndef PMSM_RK4_H
 #define PMSM_RK4_H
 
-#include <math.h>
-
 #include "pmsm_dq.h"
+#include "sim_real.h"
 
 /* Largest state vector of any plant. */
 #define PMSM_RK4_MAX 5
@@ -36,24 +36,25 @@
 #define PMSM_RK4_THETA 3
 
 /* Right-hand side: dx = f(x) at the stage angle (cs = cos, sn = sin). */
-typedef void (*pmsm_rk4_rhs_fn)(const void *ctx, const double *x, double cs, double sn, double *dx);
+typedef void (*pmsm_rk4_rhs_fn)(const void *ctx, const sim_real_t *x, sim_real_t cs, sim_real_t sn,
+                                sim_real_t *dx);
 
-static inline void pmsm_rk4_integrate(pmsm_rk4_rhs_fn f, const void *ctx, int rotate, double *x,
-                                      int nx, double dt_s, int substeps)
+static inline void pmsm_rk4_integrate(pmsm_rk4_rhs_fn f, const void *ctx, int rotate, sim_real_t *x,
+                                      int nx, sim_real_t dt_s, int substeps)
 {
-    const double h = dt_s / (double)substeps;
-    const double h2 = 0.5 * h;
-    const double h6 = h / 6.0;
+    const sim_real_t h = dt_s / (sim_real_t)substeps;
+    const sim_real_t h2 = SIM_R(0.5) * h;
+    const sim_real_t h6 = h / SIM_R(6.0);
     int n, i;
 
     for (n = 0; n < substeps; ++n) {
-        double k1[PMSM_RK4_MAX], k2[PMSM_RK4_MAX], k3[PMSM_RK4_MAX], k4[PMSM_RK4_MAX];
-        double xs[PMSM_RK4_MAX];
-        double c0 = 1.0, s0 = 0.0, cs = 1.0, sn = 0.0;
+        sim_real_t k1[PMSM_RK4_MAX], k2[PMSM_RK4_MAX], k3[PMSM_RK4_MAX], k4[PMSM_RK4_MAX];
+        sim_real_t xs[PMSM_RK4_MAX];
+        sim_real_t c0 = SIM_R(1.0), s0 = SIM_R(0.0), cs = SIM_R(1.0), sn = SIM_R(0.0);
 
         if (rotate) {
-            c0 = cos(x[PMSM_RK4_THETA]);
-            s0 = sin(x[PMSM_RK4_THETA]);
+            c0 = SIM_COS(x[PMSM_RK4_THETA]);
+            s0 = SIM_SIN(x[PMSM_RK4_THETA]);
         }
         f(ctx, x, c0, s0, k1);
 
@@ -82,7 +83,7 @@ static inline void pmsm_rk4_integrate(pmsm_rk4_rhs_fn f, const void *ctx, int ro
         f(ctx, xs, cs, sn, k4);
 
         for (i = 0; i < nx; ++i) {
-            x[i] += h6 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+            x[i] += h6 * (k1[i] + SIM_R(2.0) * k2[i] + SIM_R(2.0) * k3[i] + k4[i]);
         }
     }
 }

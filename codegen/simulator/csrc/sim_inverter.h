@@ -1,8 +1,9 @@
 /*
  * sim_inverter.h -- the inverter non-idealities every topology's plant
  * shares: dead time and device voltage drops, on leg LEVELS (two-level:
- * 0 = lower rail, 1 = upper; T-type: -1 = N, 0 = O, +1 = P), float64
- * (hand-written runtime).
+ * 0 = lower rail, 1 = upper; T-type: -1 = N, 0 = O, +1 = P) (hand-written
+ * runtime, written once on sim_real_t: float64 on the host, float32 on
+ * board, sim_real.h).
  *
  * Specification: docs/simulation.md "Inverter non-idealities".
  *
@@ -34,17 +35,18 @@
 #define SIM_INVERTER_H
 
 #include "pmsm_dq.h"
+#include "sim_real.h"
 
 /* sign(x) in {-1, 0, +1} */
-static inline double sim_inverter_sign(double x)
+static inline sim_real_t sim_inverter_sign(sim_real_t x)
 {
-    return (x > 0.0) ? 1.0 : ((x < 0.0) ? -1.0 : 0.0);
+    return (x > SIM_R(0.0)) ? SIM_R(1.0) : ((x < SIM_R(0.0)) ? SIM_R(-1.0) : SIM_R(0.0));
 }
 
 /* Levels of the three legs during the dead time of the edges from[] -> to[]
  * (legs without an edge: to[x]) given the phase currents i_abc[] (A). */
 static inline void sim_inverter_dead_levels(const int from[3], const int to[3],
-                                            const double i_abc[3], int out[3])
+                                            const sim_real_t i_abc[3], int out[3])
 {
     int x;
     for (x = 0; x < 3; ++x) {
@@ -52,9 +54,9 @@ static inline void sim_inverter_dead_levels(const int from[3], const int to[3],
         const int hi = from[x] < to[x] ? to[x] : from[x];
         if (from[x] == to[x]) {
             out[x] = to[x];
-        } else if (i_abc[x] > 0.0) {
+        } else if (i_abc[x] > SIM_R(0.0)) {
             out[x] = lo;
-        } else if (i_abc[x] < 0.0) {
+        } else if (i_abc[x] < SIM_R(0.0)) {
             out[x] = hi;
         } else {
             out[x] = from[x];
@@ -70,38 +72,53 @@ static inline int sim_inverter_edges(const int from[3], const int to[3])
 
 /* Alpha-beta voltage of the device drops (V) at the stage currents i_d, i_q
  * and cos/sin of the stage angle; n_dev[x]: devices in leg x's path. */
-static inline void sim_inverter_drop_ab(double drop_v, const double n_dev[3], double id, double iq,
-                                        double cs, double sn, double *du_alpha, double *du_beta)
+static inline void sim_inverter_drop_ab(sim_real_t drop_v, const sim_real_t n_dev[3], sim_real_t id,
+                                        sim_real_t iq, sim_real_t cs, sim_real_t sn,
+                                        sim_real_t *du_alpha, sim_real_t *du_beta)
 {
-    const double i_al = id * cs - iq * sn;
-    const double i_be = id * sn + iq * cs;
-    const double ia = i_al;
-    const double ib = -0.5 * i_al + PMSM_DQ_SQRT3_HALF * i_be;
-    const double ic = -ia - ib;
-    const double da = -drop_v * n_dev[0] * sim_inverter_sign(ia);
-    const double db = -drop_v * n_dev[1] * sim_inverter_sign(ib);
-    const double dc = -drop_v * n_dev[2] * sim_inverter_sign(ic);
-    *du_alpha = (2.0 / 3.0) * (da - 0.5 * (db + dc));
+    const sim_real_t i_al = id * cs - iq * sn;
+    const sim_real_t i_be = id * sn + iq * cs;
+    const sim_real_t ia = i_al;
+    const sim_real_t ib = -SIM_R(0.5) * i_al + PMSM_DQ_SQRT3_HALF * i_be;
+    const sim_real_t ic = -ia - ib;
+    const sim_real_t da = -drop_v * n_dev[0] * sim_inverter_sign(ia);
+    const sim_real_t db = -drop_v * n_dev[1] * sim_inverter_sign(ib);
+    const sim_real_t dc = -drop_v * n_dev[2] * sim_inverter_sign(ic);
+    *du_alpha = (SIM_R(2.0) / SIM_R(3.0)) * (da - SIM_R(0.5) * (db + dc));
     *du_beta = PMSM_DQ_SQRT3_INV * (db - dc);
 }
 
-/* Phase currents (i_a, i_b, i_c) of a motor state, A. */
-static inline void sim_inverter_phase_currents(double id, double iq, double theta_e_rad,
-                                               double i_abc[3])
+/* The device drops of n_dev[] devices per leg added to the dq voltage (ud, uq) at the stage
+ * currents (id, iq) and cos/sin of the stage angle: u_dq += Park(du_alpha, du_beta). */
+static inline void sim_inverter_add_drops(sim_real_t drop_v, const sim_real_t n_dev[3], sim_real_t id,
+                                          sim_real_t iq, sim_real_t cs, sim_real_t sn,
+                                          sim_real_t *ud, sim_real_t *uq)
 {
-    pmsm_dq_phase_currents(id, iq, theta_e_rad, &i_abc[0], &i_abc[1]);
+    sim_real_t dua, dub, dud, duq;
+    sim_inverter_drop_ab(drop_v, n_dev, id, iq, cs, sn, &dua, &dub);
+    pmsm_dq_park(dua, dub, cs, sn, &dud, &duq);
+    *ud += dud;
+    *uq += duq;
+}
+
+/* Phase currents (i_a, i_b, i_c) of a motor state, A. */
+static inline void sim_inverter_phase_currents(sim_real_t id, sim_real_t iq, sim_real_t theta_e_rad,
+                                               sim_real_t i_abc[3])
+{
+    pmsm_dq_currents(id, iq, theta_e_rad, &i_abc[0], &i_abc[1]);
     i_abc[2] = -i_abc[0] - i_abc[1];
 }
 
 /*
  * Sub-steps of a piece of length len_s of a constant-voltage interval whose
- * largest sub-step is h_max_s: ceil(len_s/h_max_s) with a 1e-9 relative
- * tolerance (so that len_s = n*h_max_s gives n), at least 1.
+ * largest sub-step is h_max_s: ceil(len_s/h_max_s) with a relative
+ * tolerance SIM_SUBSTEP_TOL (float64 1e-9; so that len_s = n*h_max_s gives
+ * n), at least 1, at most SIM_SUBSTEP_MAX.
  */
-static inline int sim_inverter_substeps(double len_s, double h_max_s)
+static inline int sim_inverter_substeps(sim_real_t len_s, sim_real_t h_max_s)
 {
-    const double nd = ceil(len_s / h_max_s - 1e-9);
-    return (nd < 1.0) ? 1 : (nd > 1e8 ? 100000000 : (int)nd);
+    const sim_real_t nd = SIM_CEIL(len_s / h_max_s - SIM_SUBSTEP_TOL);
+    return (nd < SIM_R(1.0)) ? 1 : (nd > (sim_real_t)SIM_SUBSTEP_MAX ? SIM_SUBSTEP_MAX : (int)nd);
 }
 
 #endif /* SIM_INVERTER_H */

@@ -25,8 +25,8 @@
  *     speed_imposed != 0: the speed loop is open; T*(k) = load_nm[k], read
  *       as the torque the drive must deliver against the load machine.
  *  4. Controller step with the topology's inputs, every field converted to
- *     the step's number format as a real controller sees them (the
- *     topology's sim .c).
+ *     the step's number format as a real controller sees them (the motor's:
+ *     SIM_MOTOR_INPUTS, sim_motor_inputs.h; the rest: the topology's sim .c).
  *  5. Record the sample instant and the decision.  sim_period_record
  *  6./7. The topology's decision queue (actuation delay d = delay_periods:
  *     the decision of k acts during [t_k+d, t_k+d+1)) and plant integration
@@ -46,6 +46,7 @@
 #include <string.h>
 
 #include "sim_api.h"
+#include "sim_motor_inputs.h"
 
 /* Largest actuation delay, periods (the depth of the topologies' decision queues). */
 #define SIM_PERIOD_MAX_DELAY 2
@@ -64,20 +65,6 @@ typedef struct {
     double t_ref;     /* T*, N*m */
     double integral;  /* PI integrator after this period (committed with it), N*m */
 } sim_sample_t;
-
-/* Step 4, the controller inputs every topology fills alike: the motor
- * measurements (codegen.records.MOTOR_INPUT_FIELDS) and T*, each converted
- * to the step's number format as a real controller sees them (MPC_ENCODE_*,
- * mpc_binding.h: a float cast, or a fixed-point count).  `in` is the topology's mpc_input_t
- * (a macro: the input type is the generated binding's), `v` a sim_sample_t. */
-#define SIM_PERIOD_MOTOR_INPUTS(in, v)                          \
-    do {                                                        \
-        (in).ia_a = MPC_ENCODE_ia_a((v).ia);                    \
-        (in).ib_a = MPC_ENCODE_ib_a((v).ib);                    \
-        (in).theta_e_rad = MPC_ENCODE_theta_e_rad((v).th);      \
-        (in).omega_e_rad_s = MPC_ENCODE_omega_e_rad_s((v).omega_e); \
-        (in).torque_ref_nm = MPC_ENCODE_torque_ref_nm((v).t_ref); \
-    } while (0)
 
 /* Shared parameter checks (pmsm_dq_sim_params_valid, sim_period_plant_valid); 1 valid, 0 not
  * (p NULL: 0). */

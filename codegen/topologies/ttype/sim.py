@@ -24,8 +24,6 @@ decisions the inverter holds OOO.  Details: ``csrc/ttype_sim.c``.  Plant model a
 """
 from __future__ import annotations
 
-import math
-from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -36,14 +34,12 @@ from codegen.numfmt import NumberFormat, number_format
 from codegen.records import Record, fields
 from codegen.simulator import api
 from codegen.simulator.driver import (
-    DEFAULT_CHUNK,
     MAX_SUBSTEP_S,
-    PeriodStepper,
+    Simulator,
     TraceBase,
     fill_common_params,
     motor_inputs,
     plant_udc_v,
-    run_chunked,
     trace_class,
 )
 from codegen.simulator.records import SIM_PARAMS, SIM_STATE, SIM_TRACE, SimStruct
@@ -87,7 +83,7 @@ SIM = api.SimApi("ttype", PARAMS, STATE, TRACE, Path(__file__).resolve().parent 
     -1: "invalid simulator arguments (motor/inverter/speed-loop parameters)",
     -2: "the plant state became non-finite (the drive diverged)",
     -3: "the controller returned an invalid decision (vector, states or segment times)",
-})
+}, core=("ttype_rhs.h", "ttype_decision.h"), board=("ttype_onboard.c",))
 
 
 class _TraceProperties(TraceBase):
@@ -137,21 +133,6 @@ def params_from_model(ffi: Any, model: Model, substep_max_s: float | None = None
     return p
 
 
-def run_closed_loop(ffi: Any, lib: Any, model: Model, progress: Callable[[float], None] | None = None, *,
-                    chunk: int = DEFAULT_CHUNK, substep_max_s: float | None = None, initial_speed_rpm: float = 0.0) -> Any:
-    """Run the model's scenario through the compiled T-type loop; return the :class:`Trace`.
-
-    ``(ffi, lib)``: a cffi library holding ``ttype_sim_init``/``ttype_sim_run``
-    built with the controller for ``model``.  ``progress`` is called after
-    every chunk with the completed fraction.  Raises :class:`SimulationError`
-    on refused parameters or divergence.
-    """
-    params = params_from_model(ffi, model, substep_max_s)
-    arrays = run_chunked(ffi, lib, SIM, model, params, progress, chunk,
-                         initial_speed_rad_s=initial_speed_rpm * 2.0 * math.pi / 60.0)
-    return Trace(dt_s=float(model.controller.dt_s), udc_v=plant_udc_v(model), **arrays)
-
-
 def controller_inputs(trace: Any, model: Model, nf: NumberFormat | None = None) -> np.ndarray:
     """The controller-step inputs of every period, exactly as the C loop built them.
 
@@ -176,17 +157,8 @@ def controller_inputs(trace: Any, model: Model, nf: NumberFormat | None = None) 
 DECISION_FIELD = "vector"
 
 
-def period_stepper(lib: Any, model: Model, *, substep_max_s: float | None = None,
-                   initial_speed_rpm: float = 0.0) -> PeriodStepper:
-    """The closed loop of :func:`run_closed_loop` one period at a time, the decision given from outside
-    (``lib``: a :class:`~codegen.hostbuild.HostLib` built with the simulator)."""
-    return PeriodStepper(lib.ffi, lib.lib, SIM, model, params_from_model(lib.ffi, model, substep_max_s),
-                         lib.records.input.dtype, lib.records.output.dtype,
-                         initial_speed_rad_s=initial_speed_rpm * 2.0 * math.pi / 60.0)
-
-
 def trace_from(arrays: dict[str, np.ndarray], model: Model) -> Any:
-    """The :class:`Trace` of arrays from :meth:`PeriodStepper.result`."""
+    """The :class:`Trace` of trace arrays (``run_chunked``, ``PeriodStepper.result``)."""
     return Trace(dt_s=float(model.controller.dt_s), udc_v=plant_udc_v(model), **arrays)
 
 
@@ -195,3 +167,10 @@ def trace_metrics(trace: Any, model: Model) -> dict[str, Any]:
     from codegen.topologies.ttype.metrics import three_level_metrics
 
     return three_level_metrics(trace, model)
+
+
+#: the closed loop through the compiled C (its runs, period by period, the on-board plant's files)
+SIMULATOR = Simulator(SIM, params_from_model, trace_from)
+#: ``run_closed_loop(ffi, lib, model, progress=None, *, chunk, substep_max_s, initial_speed_rpm)``: the
+#: model's scenario through the compiled loop, its :class:`Trace` (:meth:`Simulator.run`)
+run_closed_loop = SIMULATOR.run

@@ -23,7 +23,6 @@ details: ``csrc/twolevel_sim.c``.
 """
 from __future__ import annotations
 
-from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -34,14 +33,13 @@ from codegen.numfmt import NumberFormat, number_format
 from codegen.records import Record, fields
 from codegen.simulator import api
 from codegen.simulator.driver import (
-    DEFAULT_CHUNK,
-    PeriodStepper,
+    MAX_SUBSTEP_S,
+    Simulator,
     TraceBase,
     default_substeps,
     fill_common_params,
     motor_inputs,
     plant_udc_v,
-    run_chunked,
     trace_class,
 )
 from codegen.simulator.records import SIM_PARAMS, SIM_STATE, SIM_TRACE, SimStruct
@@ -67,7 +65,7 @@ SIM = api.SimApi("twolevel", PARAMS, STATE, TRACE, Path(__file__).resolve().pare
     -1: "invalid simulator arguments (motor/inverter/speed-loop parameters)",
     -2: "the plant state became non-finite (the drive diverged)",
     -3: "the controller returned a switching state outside 0..7",
-})
+}, core=("twolevel_rhs.h",), board=("twolevel_onboard.c",))
 
 if TYPE_CHECKING:  # a class for annotations; the fields come from TRACE
     class Trace(TraceBase):
@@ -85,33 +83,19 @@ else:
         """)
 
 
-def params_from_model(ffi: Any, model: Model, substeps: int | None = None) -> Any:
+def params_from_model(ffi: Any, model: Model, substep_max_s: float | None = None) -> Any:
     """A new ``twolevel_sim_params_t *`` filled from the model (the plant: :func:`fill_common_params`).
 
-    ``substeps`` defaults to :func:`default_substeps` (sub-step <= 1 us).
+    ``substeps``: the fewest equal RK4 sub-steps of at most ``substep_max_s`` (default
+    :data:`MAX_SUBSTEP_S`, 1 us) per period (:func:`default_substeps`).
     ``speed_imposed`` is set when ``scenario.speed_mode == "imposed"`` (the
     load machine holds the speed profile; the torque reference is then the
     scenario's load torque).
     """
     c = model.controller
     p = fill_common_params(ffi.new(f"{PARAMS.ctype} *"), model)
-    p.substeps = int(substeps) if substeps is not None else default_substeps(c.dt_s)
+    p.substeps = default_substeps(c.dt_s, MAX_SUBSTEP_S if substep_max_s is None else float(substep_max_s))
     return p
-
-
-def run_closed_loop(ffi: Any, lib: Any, model: Model, progress: Callable[[float], None] | None = None, *,
-                    chunk: int = DEFAULT_CHUNK, substeps: int | None = None) -> Any:
-    """Run the model's scenario through the compiled loop; return the :class:`Trace`.
-
-    ``(ffi, lib)`` is a cffi library holding ``twolevel_sim_init`` and
-    ``twolevel_sim_run`` (built with the controller generated for ``model``).
-    ``progress`` is called after every chunk with the completed fraction.
-    Raises :class:`SimulationError` if the simulator refuses the parameters
-    or the run diverges.
-    """
-    params = params_from_model(ffi, model, substeps)
-    arrays = run_chunked(ffi, lib, SIM, model, params, progress, chunk)
-    return Trace(dt_s=float(model.controller.dt_s), **arrays)
 
 
 def controller_inputs(trace: Any, model: Model, nf: NumberFormat | None = None) -> np.ndarray:
@@ -134,15 +118,8 @@ def controller_inputs(trace: Any, model: Model, nf: NumberFormat | None = None) 
 DECISION_FIELD = "sw"
 
 
-def period_stepper(lib: Any, model: Model, *, substeps: int | None = None) -> PeriodStepper:
-    """The closed loop of :func:`run_closed_loop` one period at a time, the decision given from outside
-    (``lib``: a :class:`~codegen.hostbuild.HostLib` built with the simulator)."""
-    return PeriodStepper(lib.ffi, lib.lib, SIM, model, params_from_model(lib.ffi, model, substeps),
-                         lib.records.input.dtype, lib.records.output.dtype)
-
-
 def trace_from(arrays: dict[str, np.ndarray], model: Model) -> Any:
-    """The :class:`Trace` of arrays from :meth:`PeriodStepper.result`."""
+    """The :class:`Trace` of trace arrays (``run_chunked``, ``PeriodStepper.result``)."""
     return Trace(dt_s=float(model.controller.dt_s), **arrays)
 
 
@@ -151,3 +128,10 @@ def trace_metrics(trace: Any, model: Model) -> dict[str, Any]:
     from codegen.topologies.twolevel.metrics import two_level_metrics
 
     return two_level_metrics(trace, model)
+
+
+#: the closed loop through the compiled C (its runs, period by period, the on-board plant's files)
+SIMULATOR = Simulator(SIM, params_from_model, trace_from)
+#: ``run_closed_loop(ffi, lib, model, progress=None, *, chunk, substep_max_s, initial_speed_rpm)``: the
+#: model's scenario through the compiled loop, its :class:`Trace` (:meth:`Simulator.run`)
+run_closed_loop = SIMULATOR.run

@@ -38,7 +38,9 @@
  * -i_a < 0 and lowers V_o; its N-type partner ONN (leg a at O) has i_o = i_a
  * and raises it.
  *
- * Motor: pmsm_dq.h (Ld and Lq may differ).
+ * Motor: pmsm_dq.h (Ld and Lq may differ).  The right-hand side of one
+ * interval of constant leg levels: ttype_rhs.h (written once on sim_real_t:
+ * also the firmware's on-board plant, in float32).
  *
  * Integration (docs/simulation.md "Plant"): within one segment the
  * switching state is constant; the 5-state ODE (i_d, i_q, omega_m, theta_e,

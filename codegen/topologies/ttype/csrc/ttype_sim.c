@@ -31,11 +31,11 @@
  *  5. Record period k: sample-instant values, the decision, the controller's
  *     prev_vector / t_n_prev_s, and the waveform of the applied period (its 7
  *     segments).
- *  6. Check the decision: vector <= 62, states[i] <= 26, seg_s[i] finite and
- *     >= 0, |sum seg_s - dt_s| <= 1e-4*dt_s.  It is stored in double with
- *     the last non-empty segment set to dt_s minus the sum of the others, so
- *     that the plant's period is dt_s (the float32 sum is off by ~1e-7
- *     relative).  The period applied during [t_k, t_k+1) is the decision of
+ *  6. Check the decision (ttype_decision_take, ttype_decision.h: vector <= 62,
+ *     states[i] <= 26, seg_s[i] finite and >= 0, |sum seg_s - dt_s| <=
+ *     1e-4*dt_s).  It is stored in double with the last non-empty segment
+ *     set to dt_s minus the sum of the others, so that the plant's period is
+ *     dt_s (the float32 sum is off by ~1e-7 relative).  The period applied during [t_k, t_k+1) is the decision of
  *     k-d: this one (d = 0), "applied" (d = 1) or "prior" (d = 2).
  *  7. ttype_plant_advance_period over the applied 7 segments from the state
  *     at the end of the previous period (dead time at every leg edge),
@@ -65,9 +65,10 @@
 #include "sim_period.h"
 #include "ttype_plant.h"
 #include "mpc_binding.h"
+#include "ttype_decision.h"
 
-#define TTYPE_SIM_OOO 13
-#define TTYPE_SIM_N_VECTORS 63
+#define TTYPE_SIM_OOO TTYPE_DECISION_OOO
+#define TTYPE_SIM_N_VECTORS TTYPE_DECISION_N_VECTORS
 
 static int params_valid(const ttype_sim_params_t *p)
 {
@@ -100,14 +101,6 @@ int ttype_sim_init(const ttype_sim_params_t *p, ttype_sim_state_t *state)
     return 0;
 }
 
-/* One decision of the queue: vector, T_N, and the 7 segments in double. */
-typedef struct {
-    int32_t vector;
-    double t_n_s;
-    uint16_t states[TTYPE_PLANT_N_SEG];
-    double seg_s[TTYPE_PLANT_N_SEG];
-} decision_t;
-
 /* A carried decision is valid (vector 0..62, states 0..26, durations finite, >= 0). */
 static int decision_valid(int32_t vector, const uint16_t states[7], const double seg_s[7])
 {
@@ -132,7 +125,7 @@ static int state_valid(const ttype_sim_state_t *state)
 }
 
 /* The decision of k-1 (slot 0, "applied") or k-2 (slot 1, "prior"). */
-static void queued(const ttype_sim_state_t *state, int slot, decision_t *d)
+static void queued(const ttype_sim_state_t *state, int slot, ttype_decision_t *d)
 {
     int i;
     d->vector = slot == 0 ? state->applied_vector : state->prior_vector;
@@ -146,7 +139,7 @@ static void queued(const ttype_sim_state_t *state, int slot, decision_t *d)
 /* The controller's prev_vector / t_n_prev_s: the decision of k-d applied during [t_k, t_k+1),
  * for d = 0 the one held at the sample instant (of k-1). */
 static void controller_prev(const ttype_sim_params_t *p, const ttype_sim_state_t *state,
-                            decision_t *d)
+                            ttype_decision_t *d)
 {
     queued(state, p->common.delay_periods >= 2 ? 1 : 0, d);
 }
@@ -166,56 +159,9 @@ static unsigned leg_steps(int from, int to)
     return n;
 }
 
-/* v in [0, n) (a function, so that unsigned fields do not trip -Wtype-limits) */
-static int in_range(long v, long n)
-{
-    return v >= 0 && v < n;
-}
-
-/* Validate the decision and convert it to double segment times (step 6
- * above) into *dec.  Returns 0 or -1. */
-static int take_decision(const ttype_sim_params_t *p, const mpc_output_t *out, decision_t *dec)
-{
-    uint16_t *st = dec->states;
-    double *seg = dec->seg_s;
-    double sum = 0.0, rest = 0.0;
-    int i, last = -1;
-    dec->vector = (int32_t)out->vector;
-    dec->t_n_s = (double)MPC_DECODE_t_n_s(out->t_n_s);
-    for (i = 0; i < TTYPE_PLANT_N_SEG; ++i) {
-        st[i] = TTYPE_SIM_OOO;
-        seg[i] = 0.0;
-    }
-    if (!in_range((long)out->vector, TTYPE_SIM_N_VECTORS)) {
-        return -1;
-    }
-    for (i = 0; i < TTYPE_PLANT_N_SEG; ++i) {
-        const double d = (double)MPC_DECODE_seg_s(out->seg_s[i]);
-        if (!in_range((long)out->states[i], TTYPE_PLANT_N_STATES) || !isfinite(d) || d < 0.0) {
-            return -1;
-        }
-        st[i] = (unsigned short)out->states[i];
-        seg[i] = d;
-        sum += d;
-        if (d > 0.0) {
-            last = i;
-        }
-    }
-    if (last < 0 || !(fabs(sum - p->common.dt_s) <= 1e-4 * p->common.dt_s)) {
-        return -1;
-    }
-    for (i = 0; i < TTYPE_PLANT_N_SEG; ++i) {
-        if (i != last) {
-            rest += seg[i];
-        }
-    }
-    seg[last] = p->common.dt_s - rest;
-    return (seg[last] > 0.0) ? 0 : -1;
-}
-
 /* Leg-level changes of the applied period a (non-empty segments only) after the state `from`;
  * *last receives the state of its last non-empty segment. */
-static unsigned applied_changes(const decision_t *a, int from, int *last)
+static unsigned applied_changes(const ttype_decision_t *a, int from, int *last)
 {
     unsigned changes = 0u;
     int i, prev = from;
@@ -249,7 +195,7 @@ static void period_input(const ttype_sim_params_t *p, const ttype_sim_state_t *s
                          ttype_plant_state_t *x, double w_ref, double load, sim_sample_t *v,
                          mpc_input_t *in)
 {
-    decision_t prev;
+    ttype_decision_t prev;
     double vo;
 
     /* 1.-3. */
@@ -259,7 +205,7 @@ static void period_input(const ttype_sim_params_t *p, const ttype_sim_state_t *s
     vo = sampled_vo(p, state, x);
     controller_prev(p, state, &prev);
     memset(in, 0, sizeof *in);
-    SIM_PERIOD_MOTOR_INPUTS(*in, *v);
+    SIM_MOTOR_INPUTS(*in, *v);
     in->uc1_v = MPC_ENCODE_uc1_v(0.5 * p->common.udc_v + vo);
     in->uc2_v = MPC_ENCODE_uc2_v(0.5 * p->common.udc_v - vo);
     in->prev_vector = (uint16_t)prev.vector;
@@ -274,13 +220,13 @@ static int period_finish(const ttype_sim_params_t *p, ttype_sim_state_t *state,
     const int d = p->common.delay_periods;
     const double t_snap = sim_period_snap_offset(&p->common);
     double uab[7] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
-    decision_t dec, cur, prev;
+    ttype_decision_t dec, cur, prev;
     ttype_plant_state_t snap;
     unsigned changes;
     int i, last, bad;
 
     /* 6. check the decision; the period applied now is the decision of k-d */
-    bad = take_decision(p, out, &dec);
+    bad = ttype_decision_take(out, p->common.dt_s, &dec);
     if (d == 0) {
         cur = dec;
     } else {

@@ -1,6 +1,7 @@
 /*
  * twolevel_plant.c -- two-level inverter + PMSM plant, float64 (see
- * twolevel_plant.h).
+ * twolevel_plant.h): the right-hand side of twolevel_rhs.h (written once,
+ * also the on-board plant's) with dead time and snapshots.
  *
  * Specification: docs/simulation.md "Plant" (motor, inverter,
  * integration) and docs/algorithms.md (two-level MPTC) "Conventions" (space vector,
@@ -15,41 +16,17 @@
 #include <math.h>
 
 #include "pmsm_dq.h"
-#include "pmsm_rk4.h"
 #include "sim_inverter.h"
-
-/* Devices in each leg's conducting path (one switch or diode), for the device drops. */
-static const double k_n_dev[3] = {1.0, 1.0, 1.0};
-
-/* Constants of the right-hand side, computed once per constant-voltage interval. */
-typedef struct {
-    double u_alpha, u_beta;   /* inverter voltage, stationary frame, V */
-    pmsm_dq_rhs_t m;          /* motor equations (pmsm_dq.h) */
-    int zero_u;               /* 1: zero vector (all legs at one level), u_alpha = u_beta = 0 */
-    double drop_v;            /* device drop, V (0: off) */
-} rhs_t;
+#include "twolevel_rhs.h"
 
 void twolevel_plant_levels(int sw, int lv[3])
 {
-    lv[0] = (sw >> 2) & 1;
-    lv[1] = (sw >> 1) & 1;
-    lv[2] = sw & 1;
-}
-
-/* The space vector of leg levels lv (0/1) (see twolevel_plant_voltage_ab). */
-static void levels_voltage_ab(const sim_params_t *p, const int lv[3], double *u_alpha_v,
-                              double *u_beta_v)
-{
-    const double sa = (double)lv[0], sb = (double)lv[1], sc = (double)lv[2];
-    *u_alpha_v = (2.0 / 3.0) * p->udc_v * (sa - 0.5 * (sb + sc));
-    *u_beta_v = p->udc_v * PMSM_DQ_SQRT3_INV * (sb - sc);
+    twolevel_rhs_levels(sw, lv);
 }
 
 /* ---------------------------------------------------------------------------
  * Inverter: amplitude-invariant space vector of the switching state
- * (mptc-two-level.md "Conventions"):
- *   u_alpha + j*u_beta = (2/3)*Udc*(Sa + a*Sb + a^2*Sc), a = exp(j*2*pi/3)
- *   => u_alpha = (2/3)*Udc*(Sa - (Sb + Sc)/2),  u_beta = (Udc/sqrt(3))*(Sb - Sc)
+ * (twolevel_rhs.h, mptc-two-level.md "Conventions").
  * ------------------------------------------------------------------------- */
 void twolevel_plant_voltage_ab(const sim_params_t *p, int sw, double *u_alpha_v, double *u_beta_v)
 {
@@ -59,52 +36,24 @@ void twolevel_plant_voltage_ab(const sim_params_t *p, int sw, double *u_alpha_v,
         *u_beta_v = 0.0;
         return;
     }
-    twolevel_plant_levels(sw, lv);
-    levels_voltage_ab(p, lv, u_alpha_v, u_beta_v);
+    twolevel_rhs_levels(sw, lv);
+    twolevel_rhs_voltage_ab(p->udc_v, lv, u_alpha_v, u_beta_v);
 }
 
-/* ---------------------------------------------------------------------------
- * Right-hand side f(x) of the plant ODE, x = (i_d, i_q, omega_m, theta_e),
- * given cos/sin of the stage angle (docs/simulation.md "Plant"):
- *   u_d =  u_alpha*cos + u_beta*sin,  u_q = u_beta*cos - u_alpha*sin  (Park)
- *   (+ the device drops at the stage currents, sim_inverter.h, when on)
- *   di_d/dt, di_q/dt, dw_m/dt, dtheta_e/dt: pmsm_dq_derivs (pmsm_dq.h)
- * ------------------------------------------------------------------------- */
-static inline void rhs(const void *ctx, const double *x, double cs, double sn, double *dx)
-{
-    const rhs_t *c = (const rhs_t *)ctx;
-    double ud = 0.0, uq = 0.0;
-    if (!c->zero_u) {
-        ud = c->u_alpha * cs + c->u_beta * sn;
-        uq = c->u_beta * cs - c->u_alpha * sn;
-    }
-    if (c->drop_v > 0.0) {
-        double dua, dub;
-        sim_inverter_drop_ab(c->drop_v, k_n_dev, x[0], x[1], cs, sn, &dua, &dub);
-        ud += dua * cs + dub * sn;
-        uq += dub * cs - dua * sn;
-    }
-    pmsm_dq_derivs(&c->m, x[0], x[1], x[2], ud, uq, &dx[0], &dx[1], &dx[2], &dx[3]);
-}
-
-/* One interval of constant leg levels: RK4 (pmsm_rk4.h); a zero vector
- * without device drops needs no Park rotation. */
+/* One interval of constant leg levels: the right-hand side of twolevel_rhs.h, RK4 (pmsm_rk4.h). */
 static void advance_levels(pmsm_state_t *s, const sim_params_t *p, const int lv[3],
                            double load_nm, double dt_s, int substeps)
 {
-    rhs_t c;
+    twolevel_rhs_t c;
     double x[PMSM_RK4_MAX];
 
-    levels_voltage_ab(p, lv, &c.u_alpha, &c.u_beta);
-    c.zero_u = (lv[0] == lv[1] && lv[1] == lv[2]);
-    c.drop_v = p->device_drop_v;
+    twolevel_rhs_setup(&c, lv, p->udc_v, p->device_drop_v);
     pmsm_dq_rhs_setup(&c.m, p->rs_ohm, p->ld_h, p->lq_h, p->psi_f_wb, p->pole_pairs, p->j_kgm2,
                       p->b_nms, load_nm, p->speed_imposed);
 
     sim_period_motor_load(s, x);
-    pmsm_rk4_integrate(rhs, &c, !c.zero_u || c.drop_v > 0.0, x, 4, dt_s, substeps);
+    twolevel_rhs_interval(&c, x, dt_s, substeps);
     sim_period_motor_store(s, x);
-    s->theta_e_rad = pmsm_dq_wrap_angle(s->theta_e_rad);
 }
 
 int twolevel_plant_advance(pmsm_state_t *s, const sim_params_t *p, int sw, double load_nm,
@@ -114,7 +63,7 @@ int twolevel_plant_advance(pmsm_state_t *s, const sim_params_t *p, int sw, doubl
     if (sw < 0 || sw > 7 || substeps < 1 || !(dt_s > 0.0) || !isfinite(dt_s)) {
         return -1;
     }
-    twolevel_plant_levels(sw, lv);
+    twolevel_rhs_levels(sw, lv);
     advance_levels(s, p, lv, load_nm, dt_s, substeps);
     return 0;
 }
@@ -151,8 +100,8 @@ int twolevel_plant_advance_period(pmsm_state_t *s, const sim_params_t *p, int fr
         || (t_snap_s >= 0.0 && snap == NULL)) {
         return -1;
     }
-    twolevel_plant_levels(from_sw, from);
-    twolevel_plant_levels(sw, to);
+    twolevel_rhs_levels(from_sw, from);
+    twolevel_rhs_levels(sw, to);
     if (td > 0.0 && sim_inverter_edges(from, to)) {
         int dead[3];
         double i_abc[3];

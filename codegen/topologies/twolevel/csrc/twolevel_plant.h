@@ -18,6 +18,8 @@
  *   u_d =  u_alpha*cos(theta_e) + u_beta*sin(theta_e)
  *   u_q = -u_alpha*sin(theta_e) + u_beta*cos(theta_e)
  *   motor equations: pmsm_dq.h
+ * (the right-hand side: twolevel_rhs.h, written once on sim_real_t: also the
+ * firmware's on-board plant, in float32).
  *
  * Integration (docs/simulation.md "Plant"): the inverter state is
  * constant over one call, so its alpha-beta voltage is constant; the 4-state

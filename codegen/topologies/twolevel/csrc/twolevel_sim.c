@@ -115,7 +115,7 @@ static void period_input(const twolevel_sim_params_t *p, const twolevel_sim_stat
 
     /* 4. controller inputs in the step's number format, as a real controller sees them */
     memset(in, 0, sizeof *in);
-    SIM_PERIOD_MOTOR_INPUTS(*in, *v);
+    SIM_MOTOR_INPUTS(*in, *v);
     in->udc_v = MPC_ENCODE_udc_v(p->common.udc_v);
     in->prev_sw = (uint16_t)controller_prev(p, state);
 }
