@@ -1,4 +1,13 @@
-"""``mpcgen`` command line: generate, verify, simulate, tables, bench, firmware, report.
+"""``mpcgen`` command line: generate, verify, simulate, tables, bench, firmware, sweep, report, and the
+commands other packages register (``hil``).
+
+Every command is a :class:`Command`: its name, one-line help, a function adding its options and the
+function that runs it.  codegen's own are :data:`COMMANDS`; another package adds one through the
+entry-point group :data:`ENTRY_POINT_GROUP` (``mpcgen.commands``) of its distribution, an entry point
+``name = "module:ATTRIBUTE"`` naming a :class:`Command` of that name (pyproject
+``[project.entry-points."mpcgen.commands"]``), so that codegen never imports it.  The helpers such a
+command needs are public here: :func:`add_config_args`, :func:`load_model`, :func:`progress_log`,
+:func:`write_json` and the exit codes.
 
 Exit codes: 0 success; 1 the job ran and failed (mismatches, build failure);
 2 bad input (config, arguments) -- one line on stderr, no traceback.
@@ -10,22 +19,48 @@ import dataclasses
 import json
 import sys
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from importlib.metadata import entry_points
 from pathlib import Path
 
 from codegen import __version__, cliargs
 from codegen.errors import ConfigError, MpcgenError, UsageError
 from codegen.model import TARGETS, Model
 from codegen.results import write_csv_rows
+from codegen.stages.training import with_trained_tables
 from codegen.topology import topology_of
 
+__all__ = ["Command", "COMMANDS", "ENTRY_POINT_GROUP", "EXIT_OK", "EXIT_FAIL", "EXIT_BAD_INPUT", "add_config_args",
+           "load_model", "progress_log", "write_json", "registered_commands", "build_parser", "run", "main"]
+
 EXIT_OK, EXIT_FAIL, EXIT_BAD_INPUT = 0, 1, 2
+#: the entry-point group through which other packages add commands
+ENTRY_POINT_GROUP = "mpcgen.commands"
+
+Log = Callable[[str], None]
+
+
+@dataclass(frozen=True)
+class Command:
+    """One ``mpcgen`` command."""
+
+    #: the word after ``mpcgen``
+    name: str
+    #: one line for ``mpcgen --help``
+    help: str
+    #: adds the command's options to its parser
+    arguments: Callable[[argparse.ArgumentParser], None]
+    #: runs the command on the parsed arguments; returns the exit code
+    run: Callable[[argparse.Namespace], int]
 
 
 def _err(msg: str) -> None:
     print(f"mpcgen: error: {msg}", file=sys.stderr)
 
 
-def _log(quiet: bool) -> Callable[[str], None]:
+def progress_log(quiet: bool) -> Log:
+    """A progress logger: one line per message on stderr, nothing when ``quiet``."""
+
     def log(msg: str) -> None:
         if not quiet:
             print(msg, file=sys.stderr, flush=True)
@@ -33,7 +68,8 @@ def _log(quiet: bool) -> Callable[[str], None]:
     return log
 
 
-def _add_config_args(p: argparse.ArgumentParser, target: bool = False) -> None:
+def add_config_args(p: argparse.ArgumentParser, target: bool = False) -> None:
+    """The config file and its overrides (``--strategy``, ``--set SECTION.FIELD=VALUE``, ...), and ``-q``."""
     p.add_argument("config", help="configuration file (TOML)")
     p.add_argument("--strategy", help="override controller.strategy")
     p.add_argument("--predictor", help="override controller.predictor (flux-geometry, dq-euler)")
@@ -51,7 +87,8 @@ def _add_config_args(p: argparse.ArgumentParser, target: bool = False) -> None:
     p.add_argument("-q", "--quiet", action="store_true", help="no progress output")
 
 
-def _load(args: argparse.Namespace) -> Model:
+def load_model(args: argparse.Namespace) -> Model:
+    """The config of :func:`add_config_args`' arguments, loaded and checked (warnings to stderr)."""
     from codegen.config import load_config, parse_override
 
     overrides: dict[str, object] = {}
@@ -76,7 +113,8 @@ def _strategies(args: argparse.Namespace, model: Model) -> list[str]:
                                  topology_of(model).strategies)
 
 
-def _write_json(path: str | None, data: dict) -> None:
+def write_json(path: str | Path | None, data: dict) -> None:
+    """Write ``data`` as indented JSON with sorted keys (folders created); nothing when ``path`` is None."""
     if path:
         Path(path).parent.mkdir(parents=True, exist_ok=True)
         Path(path).write_text(json.dumps(data, indent=2, sort_keys=True) + "\n")
@@ -89,9 +127,9 @@ def cmd_generate(args: argparse.Namespace) -> int:
     every = args.target == "all"
     if every:
         args.target = None
-    model = _load(args)
+    model = load_model(args)
     out = cliargs.output_dir("-o", args.output)
-    log = _log(args.quiet)
+    log = progress_log(args.quiet)
     if every:  # one folder per target, same tables; the target-independent files computed once
         extra = target_independent_files(model, log)
         paths = [p for t in TARGETS for p in generate(model.replace(target=t), out / t, log=log, extra=extra)]
@@ -106,11 +144,12 @@ def cmd_generate(args: argparse.Namespace) -> int:
 def cmd_verify(args: argparse.Namespace) -> int:
     from codegen.stages.verify import verify_strategy
 
-    model = _load(args)
+    model = load_model(args)
     cliargs.at_least("--states", args.states, 1)
     cliargs.output_file("--json", args.json)
     strategies = _strategies(args, model)
-    log = _log(args.quiet)
+    log = progress_log(args.quiet)
+    model = with_trained_tables(model, strategies, log)
     results = []
     for s in strategies:
         variant = model.with_controller(strategy=s)
@@ -122,7 +161,7 @@ def cmd_verify(args: argparse.Namespace) -> int:
               f"random {r.sources['random']}, guard trips {r.faulted_states})")
         if r.mismatches:
             print(r.first_mismatch)
-    _write_json(args.json, {
+    write_json(args.json, {
         "config": model.name, "config_hash": model.config_hash(), "version": __version__,
         "strategies": {r.strategy: r.as_dict() for r in results},
     })
@@ -131,11 +170,11 @@ def cmd_verify(args: argparse.Namespace) -> int:
 
 # ---------------------------------------------------------------- simulate
 def cmd_simulate(args: argparse.Namespace) -> int:
-    model = _load(args)
+    model = load_model(args)
     cliargs.output_file("--json", args.json)
     plots = cliargs.output_dir("--plots", args.plots) if args.plots else None
     traces = cliargs.output_file("--traces", args.traces)
-    log = _log(args.quiet)
+    log = progress_log(args.quiet)
     topo = topology_of(model)
     if args.sweep_eps is not None:
         if traces is not None:
@@ -143,7 +182,9 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         eps = cliargs.check_sweep_eps("--sweep-eps", cliargs.sweep_values("--sweep-eps", args.sweep_eps), model)
         data = topo.sweep_eps(model, eps, log=log)
     else:
-        data = topo.simulate(model, _strategies(args, model), plots, log=log, traces=traces)
+        strategies = _strategies(args, model)
+        model = with_trained_tables(model, strategies, log)
+        data = topo.simulate(model, strategies, plots, log=log, traces=traces)
     print(data.pop("_table"))
     # the plant simulated (not in the config hash: it never reaches the C); actuation_delay_periods
     # None: the delay the step compensates (docs/config.md [plant])
@@ -155,30 +196,30 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         data["paper"] = side
     for warning in data.pop("_warnings", []):
         print(f"mpcgen: warning: {warning}", file=sys.stderr)
-    _write_json(args.json, data)
+    write_json(args.json, data)
     return EXIT_OK
 
 
 # ---------------------------------------------------------------- tables
 def cmd_tables(args: argparse.Namespace) -> int:
-    model = _load(args)
+    model = load_model(args)
     if args.derive:
         if not args.output:
             raise UsageError("--derive needs -o FILE: the file the trained switch tables are written to")
         out = cliargs.output_file("-o", args.output)
         assert out is not None
-        print(topology_of(model).export_tables(model, out, log=_log(args.quiet)))
+        print(topology_of(model).export_tables(model, out, log=progress_log(args.quiet)))
         return EXIT_OK
     if args.output:
         raise UsageError("-o FILE goes with --derive (write the trained switch tables)")
     json_path = cliargs.output_file("--json", args.json)
     csv_path = cliargs.output_file("--csv", args.csv)
     topo = topology_of(model)
-    print(topo.tables_text(model, args.utilisation, log=_log(args.quiet)))
+    print(topo.tables_text(model, args.utilisation, log=progress_log(args.quiet)))
     if json_path or csv_path:
-        rows = topo.tables_rows(model, args.utilisation, log=_log(args.quiet))
+        rows = topo.tables_rows(model, args.utilisation, log=progress_log(args.quiet))
         if json_path:
-            _write_json(str(json_path), {"config": model.name, "config_hash": model.config_hash(),
+            write_json(str(json_path), {"config": model.name, "config_hash": model.config_hash(),
                                          "topology": topo.name, "rows": rows})
         if csv_path:
             write_csv_rows(csv_path, rows)
@@ -189,12 +230,14 @@ def cmd_tables(args: argparse.Namespace) -> int:
 def cmd_bench(args: argparse.Namespace) -> int:
     from codegen.stages.bench import bench
 
-    model = _load(args)
+    model = load_model(args)
     cliargs.at_least("--repeats", args.repeats, 1)
     cliargs.output_file("--json", args.json)
-    data = bench(model, _strategies(args, model), emulated=args.emulated, repeats=args.repeats, log=_log(args.quiet))
+    strategies, log = _strategies(args, model), progress_log(args.quiet)
+    model = with_trained_tables(model, strategies, log)
+    data = bench(model, strategies, emulated=args.emulated, repeats=args.repeats, log=log)
     print(data.pop("_table"))
-    _write_json(args.json, data)
+    write_json(args.json, data)
     return EXIT_OK
 
 
@@ -202,10 +245,11 @@ def cmd_bench(args: argparse.Namespace) -> int:
 def cmd_firmware(args: argparse.Namespace) -> int:
     from codegen.stages.firmware import BOARDS, write_firmware_project
 
-    model = _load(args)
+    model = load_model(args)
     if args.board not in BOARDS:
         raise UsageError(f"--board = {args.board!r}: unknown board; allowed: {', '.join(BOARDS)}")
     out = cliargs.output_dir("-o", args.output)
+    # generated code never trains: trained tables come from the config's tables file
     paths = write_firmware_project(model, topology_of(model).derive(model), args.board, out)
     print(f"wrote {len(paths)} files to {args.output}; build with: make -C {args.output}")
     return EXIT_OK
@@ -218,17 +262,18 @@ def cmd_report(args: argparse.Namespace) -> int:
     from codegen.stages.quantisation import analyse, fixed_twin
     from codegen.stages.quantreport import markdown, plots, report_name
 
-    model = _load(args)
+    model = load_model(args)
     cliargs.at_least("--states", args.states, 1)
     cliargs.output_file("--json", args.json)
     out = cliargs.output_dir("-o", args.output) if args.output else None
-    log = _log(args.quiet)
+    log = progress_log(args.quiet)
     twin = fixed_twin(model)
     if twin is not model:
         log(f"report: {model.name} is {model.controller.number_format}; analysing its fixed-point twin "
             f"(controller.number_format = {twin.controller.number_format})")
         model = twin
     strategies = _strategies(args, model)
+    model = with_trained_tables(model, strategies, log)
     with tempfile.TemporaryDirectory(prefix="mpcgen-report-") as tmp:
         traces = Path(tmp) if out is not None else None
         data = analyse(model, strategies, random_states=args.states, log=log, traces=traces)
@@ -242,7 +287,7 @@ def cmd_report(args: argparse.Namespace) -> int:
                 print(out / name)
     else:
         print(text, end="")
-    _write_json(args.json, data)
+    write_json(args.json, data)
     return EXIT_OK
 
 
@@ -256,30 +301,26 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         raise UsageError(f"--plot = {plot}: the plot is written as PNG; give a file name ending in .png")
     cliargs.at_least("--monte-carlo", args.monte_carlo, 0)
     cliargs.at_least("--seed", args.seed, 0)
-    model = _load(args)
-    return sweep.command(args, model, _log(args.quiet), _strategies(args, model), outputs)
+    model = load_model(args)
+    return sweep.command(args, model, progress_log(args.quiet), _strategies(args, model), outputs)
 
 
-def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="mpcgen", description="FCS-MPC code generator for PMSM drives: generate, verify bit for bit, simulate, benchmark.")
-    p.add_argument("--version", action="version", version=f"mpcgen {__version__}")
-    sub = p.add_subparsers(dest="command", required=True)
-
-    g = sub.add_parser("generate", help="write the C controller for a target")
-    _add_config_args(g, target=True)
+# ---------------------------------------------------------------- the commands and their options
+def _generate_args(g: argparse.ArgumentParser) -> None:
+    add_config_args(g, target=True)
     g.add_argument("-o", "--output", required=True, help="output directory")
-    g.set_defaults(func=cmd_generate)
 
-    v = sub.add_parser("verify", help="compiled C vs Python reference, bit for bit")
-    _add_config_args(v)
+
+def _verify_args(v: argparse.ArgumentParser) -> None:
+    add_config_args(v)
     v.add_argument("--states", type=int, default=1_000_000, help="states per strategy (default 1000000)")
     v.add_argument("--strategies", help="comma list (default: every strategy of the topology)")
     v.add_argument("--no-closed-loop", action="store_true", help="skip the recorded closed-loop states")
     v.add_argument("--json", help="write results as JSON")
-    v.set_defaults(func=cmd_verify)
 
-    s = sub.add_parser("simulate", help="closed-loop scenario runs with the paper's metrics")
-    _add_config_args(s)
+
+def _simulate_args(s: argparse.ArgumentParser) -> None:
+    add_config_args(s)
     s.add_argument("--strategies", help="comma list (default: all of the topology)")
     s.add_argument("--json", help="write metrics as JSON")
     s.add_argument("--plots", help="directory for PNG plots")
@@ -289,10 +330,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="print the paper's published figures next to ours, with the ratios the paper draws")
     s.add_argument("--sweep-eps", metavar="START:STOP:STEP",
                    help="threshold sweep of the MPTC paper's Tables 1-2 with strategy s1 (e.g. 0.1:1.5:0.1)")
-    s.set_defaults(func=cmd_simulate)
 
-    t = sub.add_parser("tables", help="print derived switch tables and vector sets")
-    _add_config_args(t)
+
+def _tables_args(t: argparse.ArgumentParser) -> None:
+    add_config_args(t)
     t.add_argument("--utilisation", choices=("published", "training"), default=None,
                    help="topologies with trained switch tables: derive them from the published utilisation "
                         "tables or from a training run (default)")
@@ -302,24 +343,24 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("-o", "--output", help="with --derive: the tables file to write (JSON)")
     t.add_argument("--json", help="also write the tables as JSON rows (each row names its table)")
     t.add_argument("--csv", help="also write the tables as CSV (one row per table cell)")
-    t.set_defaults(func=cmd_tables)
 
-    b = sub.add_parser("bench", help="execution cost per step, all strategies side by side")
-    _add_config_args(b)
+
+def _bench_args(b: argparse.ArgumentParser) -> None:
+    add_config_args(b)
     b.add_argument("--strategies", help="comma list (default: all of the topology)")
     b.add_argument("--emulated", action="store_true", help="instructions per step on the emulated Cortex-M7 (QEMU)")
     b.add_argument("--repeats", type=int, default=5, help="timing repeats, best kept (default 5)")
     b.add_argument("--json", help="write results as JSON")
-    b.set_defaults(func=cmd_bench)
 
-    f = sub.add_parser("firmware", help="write a buildable firmware project for a board")
-    _add_config_args(f)
+
+def _firmware_args(f: argparse.ArgumentParser) -> None:
+    add_config_args(f)
     f.add_argument("--board", required=True, help="stm32h743, tms320f28377, qemu-m7 or host")
     f.add_argument("-o", "--output", required=True, help="output directory")
-    f.set_defaults(func=cmd_firmware)
 
-    w = sub.add_parser("sweep", help="parameter grids and Monte Carlo mismatch studies of simulate, on Dask")
-    _add_config_args(w)
+
+def _sweep_args(w: argparse.ArgumentParser) -> None:
+    add_config_args(w)
     w.add_argument("--strategies", help="comma list (default: all of the topology)")
     w.add_argument("--param", action="append", default=[], metavar="SECTION.FIELD=LIST_OR_RANGE",
                    help="a grid axis (repeatable): a comma list (0.2,0.5,1) or START:STOP:STEP")
@@ -335,17 +376,66 @@ def build_parser() -> argparse.ArgumentParser:
     w.add_argument("--json", help="write every run's parameters and metrics as JSON")
     w.add_argument("--csv", help="write one row per run and strategy as CSV")
     w.add_argument("--plot", help="PNG: metric against the parameter, or the Monte Carlo distribution")
-    w.set_defaults(func=cmd_sweep)
 
-    r = sub.add_parser("report", help="quantisation report of the fixed-point controller (formats, errors, "
-                                      "agreement with float32, closed loop)")
-    _add_config_args(r)
+
+def _report_args(r: argparse.ArgumentParser) -> None:
+    add_config_args(r)
     r.add_argument("--strategies", help="comma list (default: all of the topology)")
     r.add_argument("--states", type=int, default=20_000, help="random states per strategy (default 20000)")
     r.add_argument("-o", "--output", help="directory for <prefix>_quantisation.md and the PNG plots "
                                           "(default: the markdown on stdout)")
     r.add_argument("--json", help="write the analysis as JSON")
-    r.set_defaults(func=cmd_report)
+
+
+#: codegen's own commands, in ``mpcgen --help`` order
+COMMANDS: tuple[Command, ...] = (
+    Command("generate", "write the C controller for a target", _generate_args, cmd_generate),
+    Command("verify", "compiled C vs Python reference, bit for bit", _verify_args, cmd_verify),
+    Command("simulate", "closed-loop scenario runs with the paper's metrics", _simulate_args, cmd_simulate),
+    Command("tables", "print derived switch tables and vector sets", _tables_args, cmd_tables),
+    Command("bench", "execution cost per step, all strategies side by side", _bench_args, cmd_bench),
+    Command("firmware", "write a buildable firmware project for a board", _firmware_args, cmd_firmware),
+    Command("sweep", "parameter grids and Monte Carlo mismatch studies of simulate, on Dask", _sweep_args, cmd_sweep),
+    Command("report", "quantisation report of the fixed-point controller (formats, errors, agreement with "
+                      "float32, closed loop)", _report_args, cmd_report),
+)
+
+
+def _warn(msg: str) -> None:
+    print(f"mpcgen: warning: {msg}", file=sys.stderr)
+
+
+def registered_commands() -> list[Command]:
+    """The commands other packages register in :data:`ENTRY_POINT_GROUP`, by name.  An entry point
+    that does not load, or names no :class:`Command` of its own name or one of codegen's, is left out
+    with a warning: the other commands keep working."""
+    own = {c.name for c in COMMANDS}
+    found: dict[str, Command] = {}
+    for ep in sorted(entry_points(group=ENTRY_POINT_GROUP), key=lambda e: e.name):
+        if ep.name in found:
+            continue
+        try:
+            command = ep.load()
+        except Exception as exc:  # a broken plugin must not take the other commands down
+            _warn(f"command {ep.name!r} ({ep.value}) not loaded: {exc}")
+            continue
+        if not isinstance(command, Command) or command.name != ep.name or ep.name in own:
+            _warn(f"command {ep.name!r} ({ep.value}) left out: not a codegen.cli.Command named {ep.name!r}, "
+                  "or the name of a codegen command")
+            continue
+        found[ep.name] = command
+    return list(found.values())
+
+
+def build_parser(commands: Sequence[Command] | None = None) -> argparse.ArgumentParser:
+    """The ``mpcgen`` parser with ``commands`` (default: codegen's and the registered ones)."""
+    p = argparse.ArgumentParser(prog="mpcgen", description="FCS-MPC code generator for PMSM drives: generate, verify bit for bit, simulate, benchmark.")
+    p.add_argument("--version", action="version", version=f"mpcgen {__version__}")
+    sub = p.add_subparsers(dest="command", required=True)
+    for command in (*COMMANDS, *registered_commands()) if commands is None else commands:
+        c = sub.add_parser(command.name, help=command.help)
+        command.arguments(c)
+        c.set_defaults(func=command.run)
     return p
 
 
@@ -369,8 +459,11 @@ def run(parser: argparse.ArgumentParser, argv: Sequence[str] | None = None) -> i
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """``mpcgen`` (the console script): codegen's commands and the registered ones."""
     return run(build_parser(), argv)
 
 
-if __name__ == "__main__":
-    sys.exit(main())
+if __name__ == "__main__":  # run as codegen.cli, so that registered commands see this module's Command
+    from codegen import cli as _cli
+
+    sys.exit(_cli.main())

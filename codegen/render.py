@@ -208,11 +208,13 @@ def render_speed_pi(model: Model, target: str) -> dict[str, str]:
 
 
 def write_files(files: dict[str, str], outdir: Path) -> list[Path]:
-    """Write files (only when their bytes change, so builds stay incremental)."""
+    """Write relative paths -> text under ``outdir`` (folders created as needed), touching only the
+    files whose bytes change so that builds stay incremental; the paths, in name order."""
     outdir.mkdir(parents=True, exist_ok=True)
     written = []
     for name, text in sorted(files.items()):
         path = outdir / name
+        path.parent.mkdir(parents=True, exist_ok=True)
         data = text.encode()
         if not path.exists() or path.read_bytes() != data:
             path.write_bytes(data)

@@ -1,9 +1,9 @@
-"""``mpcgen`` with the ``hil`` command: codegen's command line plus the serial HIL harness.
+"""The ``mpcgen hil`` command: the serial HIL harness on codegen's command line.
 
-codegen must never import hil, so the command is added from this side:
-:func:`build_parser` extends ``codegen.cli.build_parser()`` and the ``mpcgen``
-console script points at :func:`main`.  Every other command is codegen's,
-unchanged.
+codegen must never import hil, so the command registers itself: :data:`COMMAND`
+is a :class:`codegen.cli.Command`, named in the entry-point group
+``mpcgen.commands`` (pyproject ``[project.entry-points."mpcgen.commands"]``),
+which the ``mpcgen`` console script (``codegen.cli:main``) loads.
 
     mpcgen hil CONFIG [--port URL | --board virtual|qemu-m7] --mode replay --states N --json FILE
     mpcgen hil CONFIG [--port URL | --board ...] --mode closed-loop --json FILE
@@ -24,8 +24,9 @@ from typing import Any
 from codegen import cli as base
 from codegen import cliargs
 from codegen.errors import MpcgenError, UsageError
+from codegen.stages.training import with_trained_tables
 
-__all__ = ["build_parser", "main", "cmd_hil"]
+__all__ = ["COMMAND", "cmd_hil", "main"]
 
 MODES = ("replay", "closed-loop", "onboard")
 
@@ -60,15 +61,14 @@ def cmd_hil(args: argparse.Namespace) -> int:
         raise UsageError(f"--timeout = {args.timeout}: must be a number of seconds > 0")
     cliargs.output_file("--json", args.json)
     log_path = cliargs.output_file("--log", args.log)
-    model = base._load(args)
-    schema = Schema.of(model)
+    model = base.load_model(args)
+    log = base.progress_log(args.quiet)
     if args.check_log is not None:
-        return _check_log(args, model)
+        return _check_log(args, model, log)
     try:
-        schema.max_batch  # noqa: B018 -- the records must fit a frame
+        Schema.of(model).max_batch  # noqa: B018 -- the records must fit a frame
     except ValueError as exc:
         raise UsageError(str(exc)) from None
-    log = base._log(args.quiet)
     if args.port is not None:
         try:
             open_link(args.port, args.baud).close()  # fails here, before any long run
@@ -83,6 +83,8 @@ def cmd_hil(args: argparse.Namespace) -> int:
         if len(steps) > MAX_STEPS:
             raise UsageError(f"--mode onboard: the scenario has {len(steps)} speed/load steps, SETPOINTS takes at "
                              f"most {MAX_STEPS}")
+    model = with_trained_tables(model, [model.controller.strategy], log)  # the board's config hash has them
+    schema = Schema.of(model)
     tables = topology_of(model).derive(model)
     sets = replay_states(model, tables, args.states, args.seed) if args.mode == "replay" else {}
     try:
@@ -107,7 +109,7 @@ def cmd_hil(args: argparse.Namespace) -> int:
             if args.mode == "replay":
                 data = replay(session, model, tables, sets, show_progress=not args.quiet, log=log)
             elif args.mode == "onboard":
-                return _onboard_mode(args, session, model, tables, log)
+                return _mode_onboard(args, session, model, tables, log)
             else:
                 return _loop_mode(args, session, model, tables, log)
     except serial.SerialException as exc:
@@ -116,11 +118,11 @@ def cmd_hil(args: argparse.Namespace) -> int:
           f"{data['states_per_s']:,.0f} states/s  {data['octets_per_s']:,.0f} octets/s "
           f"(921600-baud UART: {data['uart_921600_octets_per_s']:,} octets/s)  {data['cycle_unit']} "
           f"min/median/p99/max {data['cycles_min']}/{data['cycles_median']}/{data['cycles_p99']}/{data['cycles_max']}")
-    base._write_json(args.json, data)
+    base.write_json(args.json, data)
     return base.EXIT_OK if data["mismatches"] == 0 and data["lost"] == 0 else base.EXIT_FAIL
 
 
-def _check_log(args: argparse.Namespace, model: Any) -> int:
+def _check_log(args: argparse.Namespace, model: Any, log: Any) -> int:
     """``--check-log FILE``: re-verify a logged run offline (no board)."""
     from pathlib import Path
 
@@ -131,6 +133,7 @@ def _check_log(args: argparse.Namespace, model: Any) -> int:
     path = Path(args.check_log)
     if not path.is_file():
         raise UsageError(f"--check-log = {args.check_log!r}: no such file")
+    model = with_trained_tables(model, [model.controller.strategy], log)
     try:
         data = check_log(model, topology_of(model).derive(model), path)
     except (ValueError, KeyError) as exc:
@@ -139,7 +142,7 @@ def _check_log(args: argparse.Namespace, model: Any) -> int:
           f"mismatches {data['mismatches']}, results without a logged state {data['unmatched_results']}, "
           f"frames discarded (host->board {data['discarded_frames_out']}, board->host {data['discarded_frames_in']}), "
           f"malformed batches {data['bad_batches']}, malformed results {data['bad_results']}")
-    base._write_json(args.json, data)
+    base.write_json(args.json, data)
     # a malformed batch or result is a protocol fault: it fails the check (frames that do not decode
     # are counted only: the live run retried them)
     ok = data["mismatches"] == 0 and data["results"] > 0 and data["bad_batches"] == 0 and data["bad_results"] == 0
@@ -152,27 +155,23 @@ def _loop_mode(args: argparse.Namespace, session: Any, model: Any, tables: Any, 
 
     data = closed_loop(session, model, tables, show_progress=not args.quiet, log=log)
     print(summary_line(data))
-    base._write_json(args.json, data)
+    base.write_json(args.json, data)
     return base.EXIT_OK if data["ok"] else base.EXIT_FAIL
 
 
-def _onboard_mode(args: argparse.Namespace, session: Any, model: Any, tables: Any, log: Any) -> int:
+def _mode_onboard(args: argparse.Namespace, session: Any, model: Any, tables: Any, log: Any) -> int:
     """Mode onboard: run, print one line, write the JSON; the exit code."""
     from .onboard import onboard, summary_line
 
     data = onboard(session, model, tables, decimation=args.decimation, show_progress=not args.quiet, log=log)
     print(summary_line(data))
-    base._write_json(args.json, data)
+    base.write_json(args.json, data)
     return base.EXIT_OK if data["ok"] else base.EXIT_FAIL
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """codegen's parser with the ``hil`` command added."""
-    p = base.build_parser()
-    sub = next(a for a in p._actions if isinstance(a, argparse._SubParsersAction))
-    h = sub.add_parser("hil", help="run the controller on a board over a serial port, bit for bit against "
-                                   "the reference")
-    base._add_config_args(h)
+def _arguments(h: argparse.ArgumentParser) -> None:
+    """The options of ``mpcgen hil``."""
+    base.add_config_args(h)
     where = h.add_mutually_exclusive_group()
     where.add_argument("--port", help="serial URL of the board: a device (/dev/ttyACM0), a pseudo-terminal or "
                                       "socket://HOST:PORT")
@@ -201,13 +200,16 @@ def build_parser() -> argparse.ArgumentParser:
     h.add_argument("--retries", type=int, default=3, help="times a state is sent again before it counts as lost")
     h.add_argument("--batch", type=int, default=16, help="states per BATCH frame (at most the board's max batch)")
     h.add_argument("--json", help="write the summary as JSON")
-    h.set_defaults(func=cmd_hil)
-    return p
+
+
+#: ``mpcgen hil`` (the entry point ``hil = "hil.cli:COMMAND"`` of the group ``mpcgen.commands``)
+COMMAND = base.Command("hil", "run the controller on a board over a serial port, bit for bit against the reference",
+                       _arguments, cmd_hil)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """``mpcgen``: every codegen command, and ``hil``."""
-    return base.run(build_parser(), argv)
+    """``mpcgen`` with ``argv`` (``codegen.cli.main``: every command, ``hil`` included)."""
+    return base.main(argv)
 
 
 if __name__ == "__main__":

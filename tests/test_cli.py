@@ -1,22 +1,71 @@
-"""Command line: --help everywhere, bad input -> one clear line and exit code 2."""
+"""Command line: --help everywhere, bad input -> one clear line and exit code 2; commands registered by
+other packages (the entry-point group ``mpcgen.commands``: ``hil``)."""
 from __future__ import annotations
 
+import argparse
 import subprocess
 import sys
+from importlib.metadata import EntryPoint
 
 import pytest
 
+from codegen import cli
 from codegen.cli import main
 
 from conftest import ROOT, SPMSM
 
-SUBCOMMANDS = ("generate", "verify", "simulate", "tables", "bench", "firmware")
+SUBCOMMANDS = ("generate", "verify", "simulate", "tables", "bench", "firmware", "sweep", "report", "hil")
 
 
 @pytest.mark.parametrize("sub", SUBCOMMANDS)
 def test_help(sub, capsys):
     assert main([sub, "--help"]) == 0
     assert "usage: mpcgen " + sub in capsys.readouterr().out
+
+
+def test_help_lists_every_command(capsys):
+    assert main(["--help"]) == 0
+    out = capsys.readouterr().out
+    for sub in SUBCOMMANDS:
+        assert f"\n    {sub} " in out, sub
+
+
+def test_console_script_is_codegens(tmp_path):
+    """The installed ``mpcgen`` is codegen.cli:main; it lists ``hil``, which hil registers as an entry point."""
+    from importlib.metadata import entry_points
+
+    (script,) = [e for e in entry_points(group="console_scripts") if e.name == "mpcgen"]
+    assert script.value == "codegen.cli:main"
+    (hil,) = [e for e in entry_points(group=cli.ENTRY_POINT_GROUP) if e.name == "hil"]
+    assert hil.load() in cli.registered_commands()
+    r = subprocess.run([sys.executable, "-m", "codegen.cli", "hil", "--help"], capture_output=True, text=True,
+                       cwd=tmp_path)
+    assert r.returncode == 0 and "usage: mpcgen hil" in r.stdout, r.stderr
+
+
+def _hello(args: argparse.Namespace) -> int:
+    print(f"hello {args.who}")
+    return 7
+
+
+#: a command registered through a (fake) entry point below
+HELLO = cli.Command("hello", "say hello", lambda p: p.add_argument("who"), _hello)
+
+
+def test_registered_commands_come_from_the_entry_point_group(monkeypatch, capsys):
+    group = cli.ENTRY_POINT_GROUP
+    eps = [EntryPoint("hello", f"{__name__}:HELLO", group),
+           EntryPoint("broken", "no_such_module_anywhere:COMMAND", group),
+           EntryPoint("generate", f"{__name__}:HELLO", group),  # codegen's name: left out
+           EntryPoint("other", f"{__name__}:HELLO", group)]  # a Command of another name: left out
+    monkeypatch.setattr(cli, "entry_points", lambda group: [e for e in eps if e.group == group])
+    assert cli.registered_commands() == [HELLO]
+    err = capsys.readouterr().err
+    assert "'broken'" in err and "'generate'" in err and "'other'" in err
+    assert main(["hello", "world"]) == 7
+    assert capsys.readouterr().out == "hello world\n"
+    assert main(["--help"]) == 0 and "say hello" in capsys.readouterr().out
+    assert main(["generate", "--help"]) == 0 and "usage: mpcgen generate" in capsys.readouterr().out
 
 
 def _edit(tmp_path, old: str, new: str, name: str = "bad.toml"):
@@ -48,7 +97,7 @@ BAD = [
     ("coverage = 0.90", "coverage = 1.5", "controller.derivation.coverage", "1.5"),
     ("udc_v = 312.0", "udc_v = 100.0", "inverter.udc_min_v", "150.0"),
     ("i_trip_a = 60.0", "i_trip_a = 0", "inverter.i_trip_a", "0"),
-    ('topology = "two-level"', 'topology = "t-type"', "controller.strategy", "conventional"),
+    ('topology = "two-level"', 'topology = "t-type"', "controller.predictor", "belongs to inverter.topology = 'two-level'"),
     ("limit_nm = 30.0", "limit_nm = -30.0", "speed_loop.limit_nm", "-30.0"),
     ("duration_s = 4.0", "duration_s = 0", "scenario.duration_s", "0"),
     ("[[0.0, 500.0], [2.0, -500.0]]", "[[0.5, 500.0], [2.0, -500.0]]", "scenario.speed_ref_rpm", "0.5"),

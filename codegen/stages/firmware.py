@@ -33,7 +33,7 @@ from codegen import __version__
 from codegen.errors import MpcgenError
 from codegen.model import Model
 from codegen.records import REAL, RecordLayout
-from codegen.render import environment
+from codegen.render import environment, write_files
 from codegen.resources import firmware_dir
 from codegen.stages.fwdata import (
     N_BENCH,
@@ -270,26 +270,13 @@ def write_firmware_project(model: Model, tables: Any, board: str, outdir: Path,
     files["gen/mpc_values.h"] = env.get_template("firmware/values.h.j2").render(ctx)
     files["gen/mpc_values.c"] = env.get_template("firmware/values.c.j2").render(ctx)
     files["gen/mpc_selftest_data.c"] = env.get_template("firmware/selftest_data.c.j2").render(ctx)
-    written = write_tree(files, outdir)
+    written = write_files(files, outdir)
     mk = {"board": spec, "sources": _sources(spec, outdir, model.prefix, protocol), "arm_cflags": ARM_CFLAGS,
           "defines": [protocol.define] if protocol is not None else [],
           "host_cflags": HOST_CFLAGS, "includes": ["gen", "firmware/runtime",
                                                    *[f"firmware/ports/{d}" for d in spec.port_dirs]],
           "model_name": model.name, "config_hash": model.config_hash(), "version": __version__}
-    written += write_tree({"Makefile": env.get_template("firmware/Makefile.j2").render(mk)}, outdir)
-    return written
-
-
-def write_tree(files: dict[str, str], outdir: Path) -> list[Path]:
-    """Write relative paths -> text under ``outdir``, touching only files whose bytes change."""
-    written = []
-    for name, text in sorted(files.items()):
-        path = outdir / name
-        path.parent.mkdir(parents=True, exist_ok=True)
-        data = text.encode()
-        if not path.exists() or path.read_bytes() != data:
-            path.write_bytes(data)
-        written.append(path)
+    written += write_files({"Makefile": env.get_template("firmware/Makefile.j2").render(mk)}, outdir)
     return written
 
 

@@ -28,7 +28,7 @@ def generate(model: Model, outdir: Path, log: Callable[[str], None] = print,
     topo = topology_of(model)
     c = model.controller
     log(f"deriving the {topo.title} tables for {model.name} ({c.strategy}, tables {c.tables})")
-    tables = topo.derive(model, progress=lambda f: log(f"  training run {f:5.0%}"))
+    tables = topo.derive(model)
     files = topo.render(model, tables, model.target)
     files.update(render_speed_pi(model, model.target))
     files[f"{model.prefix}_report.md"] = topo.report(model, tables, model.target)

@@ -3,7 +3,9 @@
 Each task is one run: the run's checked :class:`~codegen.model.Model` (the
 config with the run's overrides, loaded and checked by the client before
 anything started, so a worker needs no copy of the config file) goes through
-the topology's ``simulate`` for every chosen strategy, and the task returns
+the training stage (:mod:`codegen.stages.training`: the run's trained tables, when a
+strategy needs them and the config names no tables file) and the topology's
+``simulate`` for every chosen strategy, and the task returns
 plain data (JSON-ready dicts).  The wall-clock fields of ``simulate``
 (``wall_s``, ``periods_per_s``) are split off into the task's timing, so the
 metrics of a run are the same bit for bit whichever runner computed them.
@@ -26,6 +28,7 @@ from typing import Any
 from codegen.errors import MpcgenError, UsageError
 from codegen.model import Model
 from codegen.results import clean_json, metric_sets
+from codegen.stages.training import with_trained_tables
 from codegen.topology import topology_of
 
 __all__ = ["Runner", "check_runner_args", "run_task", "run_plan", "TIMING_KEYS"]
@@ -104,6 +107,7 @@ def run_task(index: int, model: Model, strategies: list[str]) -> dict[str, Any]:
     run's wall time and the worker that ran it.
     """
     t0 = time.perf_counter()
+    model = with_trained_tables(model, strategies)  # the run's own training (cached per training config)
     data = topology_of(model).simulate(model, list(strategies), None, log=lambda _msg: None)
     data.pop("_table", None)
     warnings = list(data.pop("_warnings", []))

@@ -47,10 +47,12 @@ def _spaced(x: np.ndarray, n: int) -> np.ndarray:
 
 def record_controller(name: str) -> None:
     from codegen.config import load_config
+    from codegen.stages.training import with_trained_tables
     from codegen.topology import topology_of
 
     base = load_config(ROOT / "examples" / f"{name}.toml")
     topo = topology_of(base)
+    base = with_trained_tables(base, topo.strategies)  # s2/s3: the tables trained on the example's scenario
     arrays: dict[str, np.ndarray] = {}
     for s in topo.strategies:
         m = base.with_controller(strategy=s)

@@ -11,6 +11,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -26,11 +27,11 @@ from codegen.topologies.twolevel.metrics import two_level_metrics
 from codegen.topologies.twolevel.switch_tables import tables_for
 
 
-def run_variant(model: Model, log: Callable[[str], None]):
+def run_variant(model: Model, log: Callable[[str], None]) -> tuple[Any, float]:
     """Build and run one strategy variant; returns (trace, wall_s)."""
     from codegen.topologies.twolevel.sim import run_closed_loop
 
-    t = tables_for(model, progress=lambda f: log(f"  training run {f:5.0%}"))
+    t = tables_for(model)
     lib = build_host_library(model, t, with_sim=True)
     s = model.controller.strategy
     t0 = time.perf_counter()
@@ -42,7 +43,7 @@ def run_variant(model: Model, log: Callable[[str], None]):
 SHOWN = ("T_rip_RMSE_nm", "psi_rip_RMSE_wb", "THD_ia_percent", "Cal_ave", "f_ave_hz")
 
 
-def table9(results: dict[str, dict]) -> str:
+def table9(results: dict[str, dict[str, Any]]) -> str:
     """Seed-001 Table 9 layout: T_rip, psi_rip, THD, Cal_ave, f_ave per strategy, the guard faults and
     the THD window (t0, t1), its fundamental and number of periods; ``*``/``n/a`` footnoted."""
     rows = [f"{'strategy':12s} {'T_rip/N*m':>10s} {'psi_rip/Wb':>11s} {'THD/%':>8s} {'Cal_ave':>8s} {'f_ave/kHz':>10s} "
@@ -56,7 +57,7 @@ def table9(results: dict[str, dict]) -> str:
 
 
 def run_scenarios(model: Model, strategies: list[str], plots: Path | None = None,
-                  log: Callable[[str], None] = print, traces: Path | None = None) -> dict:
+                  log: Callable[[str], None] = print, traces: Path | None = None) -> dict[str, Any]:
     """Every strategy over the config's scenario; JSON-ready dict plus ``_table`` and ``_warnings``
     (one line per strategy whose guard tripped).  ``traces``: write the time series there
     (:class:`~codegen.simulator.export.TraceWriter`).  A run whose trace would not fit in memory
@@ -64,7 +65,7 @@ def run_scenarios(model: Model, strategies: list[str], plots: Path | None = None
     from codegen.topologies.twolevel.sim import TRACE
 
     check_trace_memory(model, TRACE)
-    results: dict[str, dict] = {}
+    results: dict[str, dict[str, Any]] = {}
     warnings: list[str] = []
     with trace_writer(traces, TRACE) as writer:
         for s in strategies:
@@ -97,7 +98,7 @@ def run_scenarios(model: Model, strategies: list[str], plots: Path | None = None
     })
 
 
-def zero_vector_utilisation(trace, bands: list[float]) -> list[dict]:
+def zero_vector_utilisation(trace: Any, bands: list[float]) -> list[dict[str, Any]]:
     """Seed Table 1: zero-vector use among samples with |dT| <= band (dT from the controller's estimate)."""
     d_t = np.abs(trace.torque_ref_nm - trace.te_est_nm.astype(np.float64))
     zero = trace.vector == 0
@@ -111,7 +112,7 @@ def zero_vector_utilisation(trace, bands: list[float]) -> list[dict]:
     return rows
 
 
-def run_threshold_sweep(model: Model, eps_list: list[float], log: Callable[[str], None] = print) -> dict:
+def run_threshold_sweep(model: Model, eps_list: list[float], log: Callable[[str], None] = print) -> dict[str, Any]:
     """Seed Tables 1 and 2: the conventional run's zero-vector use per band, and s1 at every eps_T."""
     from codegen.topologies.twolevel.sim import TRACE
 

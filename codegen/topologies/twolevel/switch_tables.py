@@ -5,54 +5,54 @@ row plus rows derived by the rule from the seed's own utilisation Tables 6-8
 (utilisation.published_tables).
 
 ``tables = "derived"`` (mptc-two-level.md "Deriving switch tables from
-utilisation"): run the conventional controller closed loop over the config's
-own scenario (the compiled C step, proven equal to the reference), count per
-condition and sector how often each vector was chosen over the samples with
-|dT| > eps_T, and apply the coverage rule.  A cell with fewer than
-``MIN_CELL_SAMPLES`` active-vector choices is too thin to trust (a well-tuned
-conventional controller rarely leaves the eps_T band in some cells; the
-IPMSM run is an example) and takes the published-derived cell instead; the
-``tables`` command reports which cells did.  Counts are cached per config.
+utilisation"): the tables trained on the config's own scenario, which the
+model carries in ``controller.trained_tables``: read from the file
+``controller.tables_file`` names when the config is loaded
+(``tables_file.load_into``), or put there by the training stage of the
+commands that run the controller on the host.  :func:`tables_for` (the
+plugin's ``derive``) only reads them: no compiler, no file, no run.
+
+The training stage (:func:`utilisation_counts`, :func:`export_tables`) runs
+the conventional controller closed loop over the config's scenario (the
+compiled C step, proven equal to the reference), counts per condition and
+sector how often each vector was chosen over the samples with
+|dT| > eps_T, and applies the coverage rule (``tables_file``).  Counts are
+cached per training configuration in ``MPCGEN_CACHE``.
 """
 from __future__ import annotations
 
 import json
+import os
 from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
-from codegen.errors import ConfigError
+from codegen.errors import MISSING, ConfigError
 from codegen.kernels.consts import Constants
 from codegen.kernels.sector import sector12
-from codegen.model import Model, Plant
+from codegen.model import Model
 from codegen.topologies.twolevel import tables_file
 from codegen.topologies.twolevel.derive import SwitchTable, TwoLevelTables, derive_two_level
 from codegen.topologies.twolevel.reference import flux_reference, step_batch
-from codegen.topologies.twolevel.utilisation import count_utilisation, derive_table, published_tables
+from codegen.topologies.twolevel.tables_file import MIN_CELL_SAMPLES, thin_cells, training_model
+from codegen.topologies.twolevel.utilisation import count_utilisation, published_tables
 
-#: Fewest active-vector choices in a cell for its derived set to be used.
-MIN_CELL_SAMPLES = 100
+__all__ = ["MIN_CELL_SAMPLES", "thin_cells", "training_model", "utilisation_counts", "derived_tables",
+           "export_tables", "switch_table_for", "tables_for"]
 
-
-def thin_cells(counts: np.ndarray) -> np.ndarray:
-    """Mask (conditions, sectors) of cells with too few active-vector choices."""
-    return counts[..., 1:].sum(axis=-1) < MIN_CELL_SAMPLES
+Progress = Callable[[float], None]
 
 
-def training_model(model: Model) -> Model:
-    """The conventional variant whose closed-loop run is the training data (host target, no tables file)."""
-    return model.with_controller(strategy="conventional", tables="published", tables_file=None,
-                                 number_format="float32", fixed_q=None).replace(
-        target="host", plant=Plant())
-
-
-def utilisation_counts(model: Model, progress: Callable[[float], None] | None = None) -> dict[str, np.ndarray]:
-    """Counts (conditions, sectors, 7) for s2 (2 x 6) and s3 (4 x 12) from a training run."""
+def utilisation_counts(model: Model, progress: Progress | None = None) -> dict[str, np.ndarray]:
+    """Counts (conditions, sectors, 7) for s2 (2 x 6) and s3 (4 x 12) from a training run (refused, as a
+    scenario run is, when its trace would not fit in memory)."""
+    from codegen.simulator.memory import check_trace_memory
     from codegen.topologies.twolevel.hostbuild import build_host_library
-    from codegen.topologies.twolevel.sim import controller_inputs, run_closed_loop
+    from codegen.topologies.twolevel.sim import TRACE, controller_inputs, run_closed_loop
 
     train = training_model(model)
+    check_trace_memory(train, TRACE)
     t = derive_two_level(train)
     lib = build_host_library(train, t, with_sim=True)
     trace = run_closed_loop(lib.ffi, lib.lib, train, progress=progress)
@@ -80,52 +80,75 @@ def _cache_file(model: Model) -> Path:
     return cache_root() / f"training_{training_model(model).config_hash()}.json"
 
 
-def derived_tables(model: Model, progress: Callable[[float], None] | None = None) -> tuple[SwitchTable, SwitchTable, dict[str, np.ndarray]]:
-    """(s2 table, s3 table, counts): from the config's tables file, else from the training run (cached)."""
+def trained_counts(model: Model, progress: Progress | None = None) -> dict[str, np.ndarray]:
+    """The training run's counts for ``model``: from the cache, else from a run (then cached)."""
     cache = _cache_file(model)
-    if model.controller.tables_file is not None:
-        counts, stored = tables_file.read_counts(model, training_model(model))
-    elif cache.exists():
+    if cache.exists():
         raw = json.loads(cache.read_text())
-        counts = {k: np.array(v, dtype=np.int64) for k, v in raw.items()}
-    else:
-        counts = utilisation_counts(model, progress)
-        cache.parent.mkdir(parents=True, exist_ok=True)
-        cache.write_text(json.dumps({k: v.tolist() for k, v in counts.items()}))
-    d = model.controller.derivation
-    pub2, pub3 = published_tables(d.coverage, d.max_active)
-    trusted = {k: np.where(thin_cells(v)[..., None], 0, v) for k, v in counts.items()}
-    s2 = derive_table(trusted["s2"], d.coverage, d.max_active, fallback=pub2)
-    s3 = derive_table(trusted["s3"], d.coverage, d.max_active, fallback=pub3)
+        return {k: np.array(v, dtype=np.int64) for k, v in raw.items()}
+    counts = utilisation_counts(model, progress)
+    cache.parent.mkdir(parents=True, exist_ok=True)
+    tmp = cache.with_name(f"{cache.name}.{os.getpid()}.tmp")  # a concurrent reader never sees half a file
+    tmp.write_text(json.dumps({k: v.tolist() for k, v in counts.items()}))
+    tmp.replace(cache)
+    return counts
+
+
+def derived_tables(model: Model, progress: Progress | None = None) -> tuple[SwitchTable, SwitchTable, dict[str, np.ndarray]]:
+    """(s2 table, s3 table, counts): from the config's tables file, else from the training run (cached)."""
     if model.controller.tables_file is not None:
-        mine = {"s2": [[list(c) for c in r] for r in s2], "s3": [[list(c) for c in r] for r in s3]}
-        if stored != mine:
-            raise ConfigError(model.source, tables_file.FIELD, model.controller.tables_file,
-                              "its tables do not follow from its counts (edited by hand?); "
-                              "re-run `mpcgen tables CONFIG --derive -o FILE`")
-    return s2, s3, counts
+        _, counts, tables = tables_file.read_tables_file(model)
+    else:
+        counts = trained_counts(model, progress)
+        tables = tables_file.tables_from_counts(model, counts)
+    return tables["s2"], tables["s3"], counts
 
 
-def export_tables(model: Model, path: Path, progress: Callable[[float], None] | None = None) -> dict:
+def export_tables(model: Model, path: Path, progress: Progress | None = None) -> dict:
     """Run (or reuse) the training and write the tables artefact to ``path``."""
     train = training_model(model)
-    s2, s3, counts = derived_tables(model.with_controller(tables="derived", tables_file=None), progress)
+    s2, s3, counts = derived_tables(model.with_controller(tables="derived", tables_file=None, trained_tables=None),
+                                    progress)
     thin = {k: thin_cells(v) for k, v in counts.items()}
     return tables_file.write_tables_file(path, train, counts, {"s2": s2, "s3": s3}, thin, MIN_CELL_SAMPLES)
 
 
-def switch_table_for(model: Model, progress: Callable[[float], None] | None = None) -> SwitchTable | None:
-    """The table the config's strategy needs (None for conventional and s1)."""
+def missing_tables(model: Model) -> ConfigError:
+    """The error of a model whose strategy needs trained tables it does not carry (the generated code
+    never trains: the tables come from a file)."""
     c = model.controller
-    if c.strategy not in ("s2", "s3"):
+    if c.tables_file is not None:
+        return ConfigError(model.source, tables_file.FIELD, c.tables_file,
+                           "the file is not read in (load the config with codegen.config.load_config)")
+    return ConfigError(model.source, tables_file.FIELD, MISSING,
+                       f"strategy {c.strategy} with controller.tables = 'derived' needs the switch tables trained "
+                       f"on the config's scenario: write them with `mpcgen tables {model.source} --derive -o FILE`, "
+                       "then set controller.tables_file = FILE (relative to the config's folder; or "
+                       "--set controller.tables_file=FILE)")
+
+
+def switch_table_for(model: Model) -> SwitchTable | None:
+    """The table the config's strategy needs (None for conventional and s1): published, or the trained
+    tables the model carries (``controller.trained_tables``)."""
+    c = model.controller
+    if c.strategy not in tables_file.KINDS:
         return None
     if c.tables == "published":
         s2, s3 = published_tables(c.derivation.coverage, c.derivation.max_active)
-    else:
-        s2, s3, _ = derived_tables(model, progress)
-    return s2 if c.strategy == "s2" else s3
+        return s2 if c.strategy == "s2" else s3
+    if c.trained_tables is None:
+        raise missing_tables(model)
+    return dict(c.trained_tables[1])[c.strategy]
 
 
-def tables_for(model: Model, progress: Callable[[float], None] | None = None) -> TwoLevelTables:
-    """Derive everything the step needs for ``model`` (one call per variant)."""
-    return derive_two_level(model, switch_table_for(model, progress))
+def needs_training(model: Model) -> bool:
+    """True when ``model``'s strategy takes trained tables (s2/s3 with ``tables = "derived"``) and the
+    model carries none (no ``tables_file`` read in, no training stage run)."""
+    c = model.controller
+    return c.strategy in tables_file.KINDS and c.tables == "derived" and c.trained_tables is None
+
+
+def tables_for(model: Model) -> TwoLevelTables:
+    """Derive everything the step needs for ``model`` (one call per variant); pure: no compiler, no file,
+    no run (the training is a stage of its own)."""
+    return derive_two_level(model, switch_table_for(model))
