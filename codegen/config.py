@@ -3,40 +3,39 @@
 This is the only module that reads configuration files.  The flow is::
 
     file --tomllib--> nested dict --overrides--> nested dict
+         --inverter.topology--> the topology's schema (schema_for)
          --structure check--> flat {"section.field": raw value}
-         --per-field checks (SCHEMA, in order)--> flat {"section.field": value}
-         --consistency checks--> Model
+         --per-field checks (the schema, in order)--> flat {"section.field": value}
+         --the topology's consistency checks--> Model --its artefacts read in (resolve)--> Model
 
 Every failure raises :class:`~codegen.errors.ConfigError` naming the file, the
 dotted field, the offending value and what is allowed.  Field checks are
-table driven: :data:`SCHEMA` maps each dotted field to its kind and allowed
-interval or choices.  An interval bound may refer to another field
-(:class:`Ref`), which must come earlier in :data:`SCHEMA`; defaults come from
-the dataclasses in :mod:`codegen.model`, so they are written down only once.
+table driven: :data:`COMMON_SCHEMA` maps each field every topology has to its
+kind and allowed interval or choices; each topology's ``section`` module
+(found through :mod:`codegen.registry`) adds its own fields and narrows
+common ones (:func:`schema_for`).  A field of another topology is refused,
+naming the topology it belongs to.  An interval bound may refer to another
+field (:class:`Ref`), which must come earlier in the schema; defaults come
+from the dataclasses in :mod:`codegen.model`, so they are written down only
+once.
 """
 from __future__ import annotations
 
 import dataclasses
 import difflib
+import functools
 import math
 import re
 import tomllib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, NoReturn, get_args
+from typing import Any, NoReturn, Protocol, get_args
 
 from codegen.errors import FILE_FIELD, MISSING, ConfigError, Marker
 from codegen.model import (
-    COST_FORMS,
     FAULT_ACTIONS,
-    NUMBER_FORMATS,
     PLACEMENTS,
-    PREDICTORS,
-    PSI_REFS,
-    SCENARIO_SETS,
-    STRATEGIES_BY_TOPOLOGY,
-    TABLE_SOURCES,
     TARGETS,
     Controller,
     Derivation,
@@ -47,16 +46,16 @@ from codegen.model import (
     Scenario,
     SpeedLoop,
     SpeedMode,
-    Topology,
 )
-from codegen.operating import operating_findings
+from codegen.numfmt import CONFIG_FORMATS
+from codegen.operating import Finding, operating_findings
+from codegen.registry import topology_module, topology_names
 
-__all__ = ["load_config", "parse_override", "SCHEMA", "Spec", "Interval", "Ref"]
+__all__ = ["load_config", "parse_override", "COMMON_SCHEMA", "schema_for", "all_fields", "owners", "strategies_of",
+           "topology_section", "TopologySection", "Spec", "Interval", "Ref"]
 
 #: ``ConfigError.file`` for errors in command-line ``--set`` strings.
 COMMAND_LINE = "(command line)"
-
-STRATEGIES: tuple[str, ...] = tuple(s for group in STRATEGIES_BY_TOPOLOGY.values() for s in group)
 
 # C keywords (C89..C23) plus the common ``asm`` extension: a prefix equal to
 # one of these would still be a valid symbol prefix ("int_step"), but it is
@@ -163,123 +162,119 @@ class Spec:
     """How one field is checked.
 
     ``hint_low`` / ``hint_high`` start the message when a number is below /
-    above the interval; ``hint`` replaces "must be one of" for a choice.
+    above the interval; ``hint`` replaces "must be one of" for a choice (a
+    boolean with ``choices`` allows only those values).  ``required``: the
+    file must give the field, whatever the model's default (a field that
+    only one topology has keeps a default in the model for the others).
     """
 
     kind: str
     interval: Interval | None = None
-    choices: tuple[str, ...] = ()
+    choices: tuple[object, ...] = ()
     hint: str = ""
     hint_low: str = ""
     hint_high: str = ""
+    required: bool = False
 
 
-def _oc(lo: Bound, hi: Bound) -> Interval:
+def open_closed(lo: Bound, hi: Bound) -> Interval:
+    """(lo, hi]"""
     return Interval(lo, hi, lo_open=True)
 
 
-def _cc(lo: Bound, hi: Bound) -> Interval:
+def closed(lo: Bound, hi: Bound) -> Interval:
+    """[lo, hi]"""
     return Interval(lo, hi)
 
 
-def _co(lo: Bound, hi: Bound) -> Interval:
+def closed_open(lo: Bound, hi: Bound) -> Interval:
+    """[lo, hi)"""
     return Interval(lo, hi, hi_open=True)
 
 
-def _oo(lo: Bound, hi: Bound) -> Interval:
+def open_interval(lo: Bound, hi: Bound) -> Interval:
+    """(lo, hi)"""
     return Interval(lo, hi, lo_open=True, hi_open=True)
 
 
-def _real(interval: Interval, hint_low: str = "", hint_high: str = "") -> Spec:
-    return Spec(REAL, interval, hint_low=hint_low, hint_high=hint_high)
+def real_spec(interval: Interval, hint_low: str = "", hint_high: str = "", required: bool = False) -> Spec:
+    """A real field in ``interval``."""
+    return Spec(REAL, interval, hint_low=hint_low, hint_high=hint_high, required=required)
 
 
-def _choice(choices: tuple[str, ...], hint: str = "") -> Spec:
-    return Spec(CHOICE, choices=tuple(choices), hint=hint)
+def choice_spec(choices: tuple[str, ...], hint: str = "", required: bool = False) -> Spec:
+    """A string field, one of ``choices``."""
+    return Spec(CHOICE, choices=tuple(choices), hint=hint, required=required)
 
 
 _RATED_RPM = "motor.rated_speed_rpm"
 
-#: Every config field, in check order (a :class:`Ref` must point upwards).
+#: The fields every topology has, in check order (a :class:`Ref` must point upwards); each topology
+#: adds its own after them and may narrow some (its ``section`` module, :func:`schema_for`).
 #: The section of ``a.b.c`` is ``a.b``; the TOML layout follows from it.
-SCHEMA: dict[str, Spec] = {
+COMMON_SCHEMA: dict[str, Spec] = {
     "meta.name": Spec(NAME),
     "meta.prefix": Spec(PREFIX),
-    "motor.rs_ohm": _real(_oc(0, 100)),
-    "motor.ld_h": _real(_oc(0, 1)),
-    "motor.lq_h": _real(_oc(0, 1)),
-    "motor.psi_f_wb": _real(_oc(0, 10)),
-    "motor.pole_pairs": Spec(INT, _cc(1, 64)),
-    "motor.rated_speed_rpm": _real(_oc(0, 1e5)),
-    "motor.rated_torque_nm": _real(_oc(0, 1e5)),
-    "motor.j_kgm2": _real(_oc(0, 1e3)),
-    "motor.b_nms": _real(_cc(0, 1e3)),
-    "inverter.topology": _choice(get_args(Topology)),
-    "inverter.udc_v": _real(_oc(0, 1e4)),
-    "inverter.udc_min_v": _real(
-        _oo(0, Ref("inverter.udc_v")),
+    "motor.rs_ohm": real_spec(open_closed(0, 100)),
+    "motor.ld_h": real_spec(open_closed(0, 1)),
+    "motor.lq_h": real_spec(open_closed(0, 1)),
+    "motor.psi_f_wb": real_spec(open_closed(0, 10)),
+    "motor.pole_pairs": Spec(INT, closed(1, 64)),
+    "motor.rated_speed_rpm": real_spec(open_closed(0, 1e5)),
+    "motor.rated_torque_nm": real_spec(open_closed(0, 1e5)),
+    "motor.j_kgm2": real_spec(open_closed(0, 1e3)),
+    "motor.b_nms": real_spec(closed(0, 1e3)),
+    "inverter.topology": choice_spec(topology_names()),
+    "inverter.udc_v": real_spec(open_closed(0, 1e4)),
+    "inverter.udc_min_v": real_spec(
+        open_interval(0, Ref("inverter.udc_v")),
         hint_high="DC-link undervoltage guard not below the nominal DC-link voltage",
     ),
-    "inverter.udc_max_v": _real(
-        _oc(Ref("inverter.udc_v"), 2e4),
+    "inverter.udc_max_v": real_spec(
+        open_closed(Ref("inverter.udc_v"), 2e4),
         hint_low="DC-link overvoltage guard not above the nominal DC-link voltage",
     ),
-    "inverter.i_trip_a": _real(_oc(0, 1e5)),
-    "inverter.c_f": _real(_oc(0, 1), hint_low="capacitance <= 0"),
-    "controller.strategy": _choice(STRATEGIES),
-    "controller.predictor": _choice(PREDICTORS),
+    "inverter.i_trip_a": real_spec(open_closed(0, 1e5)),
+    # its choices: the strategies of the config's topology (schema_for)
+    "controller.strategy": Spec(CHOICE),
     "controller.delay_compensation": Spec(BOOL),
-    "controller.tables": _choice(TABLE_SOURCES),
-    "controller.tables_file": Spec(PATH),
-    "controller.dt_s": _real(_cc(1e-6, 1e-3)),
-    "controller.psi_ref_wb": _real(_oc(0, 10)),
-    "controller.psi_ref": _choice(PSI_REFS),
-    "controller.cost": _choice(COST_FORMS),
-    "controller.eps_t_nm": _real(_co(0, Ref("motor.rated_torque_nm"))),
-    "controller.number_format": _choice(NUMBER_FORMATS),
-    "controller.fixed_q": Spec(INT, _cc(8, 30)),
-    "controller.lambda_psi_nm_per_wb": _real(_cc(0, 1e6)),
-    "controller.lambda_vo_nm_per_v": _real(_cc(0, 1e3)),
-    "controller.t_n_min_s": _real(
-        _cc(0, Ref("controller.dt_s", 1 / 3, "Ts/3")),
-        hint_high="T_N clamp minimum above Ts/3",
-    ),
-    "controller.fault_action": _choice(FAULT_ACTIONS),
-    "controller.asc_min_speed_rpm": _real(_cc(0, Ref(_RATED_RPM, 10.0, "10*rated"))),
-    "controller.derivation.coverage": _real(_oc(0, 1)),
-    "controller.derivation.max_active": Spec(INT, _cc(1, 6)),
-    "speed_loop.kp": _real(_cc(0, 1e6)),
-    "speed_loop.ki": _real(_cc(0, 1e6)),
-    "speed_loop.limit_nm": _real(_oc(0, 1e6)),
-    "scenario.duration_s": _real(_oc(0, 100)),
-    "scenario.speed_mode": _choice(get_args(SpeedMode)),
-    "scenario.set": _choice(SCENARIO_SETS),
-    "scenario.window_s": _real(_oc(0, 100)),
+    "controller.dt_s": real_spec(closed(1e-6, 1e-3)),
+    "controller.number_format": choice_spec(CONFIG_FORMATS),
+    "controller.fixed_q": Spec(INT, closed(8, 30)),
+    "controller.fault_action": choice_spec(FAULT_ACTIONS),
+    "controller.asc_min_speed_rpm": real_spec(closed(0, Ref(_RATED_RPM, 10.0, "10*rated"))),
+    "speed_loop.kp": real_spec(closed(0, 1e6)),
+    "speed_loop.ki": real_spec(closed(0, 1e6)),
+    "speed_loop.limit_nm": real_spec(open_closed(0, 1e6)),
+    "scenario.duration_s": real_spec(closed(Ref("controller.dt_s", 10.0, "10*dt_s"), 100),
+                                     hint_low="a run shorter than 10 control periods has no metrics"),
+    "scenario.speed_mode": choice_spec(get_args(SpeedMode)),
+    "scenario.set": choice_spec(("config",), hint="this topology runs the config's own scenario"),
+    "scenario.window_s": real_spec(open_closed(0, 100)),
     "scenario.speed_ref_rpm": Spec(
-        STEPS, _cc(Ref(_RATED_RPM, -10.0, "-10*rated"), Ref(_RATED_RPM, 10.0, "10*rated"))
+        STEPS, closed(Ref(_RATED_RPM, -10.0, "-10*rated"), Ref(_RATED_RPM, 10.0, "10*rated"))
     ),
     "scenario.load_nm": Spec(STEPS),
-    "plant.actuation_delay_periods": Spec(INT, _cc(0, 2)),
-    "plant.rs_ohm": _real(_oc(0, 100)),
-    "plant.ld_h": _real(_oc(0, 1)),
-    "plant.lq_h": _real(_oc(0, 1)),
-    "plant.psi_f_wb": _real(_oc(0, 10)),
-    "plant.j_kgm2": _real(_oc(0, 1e3)),
-    "plant.b_nms": _real(_cc(0, 1e3)),
-    "plant.udc_v": _real(_oc(0, 1e4)),
-    "plant.c_f": _real(_oc(0, 1), hint_low="capacitance <= 0"),
-    "plant.dead_time_s": _real(_cc(0, Ref("controller.dt_s", 0.1, "dt_s/10"))),
-    "plant.device_drop_v": _real(_cc(0, 50)),
-    "plant.current_gain_error": _real(_cc(-0.5, 0.5)),
-    "plant.current_offset_a": _real(_cc(Ref("inverter.i_trip_a", -1.0, "-i_trip_a"), Ref("inverter.i_trip_a"))),
-    "plant.adc_bits": Spec(INT, _cc(0, 24)),
-    "plant.adc_full_scale_a": _real(_oc(0, 1e5)),
-    "plant.noise_a": _real(_cc(0, Ref("inverter.i_trip_a"))),
-    "plant.noise_seed": Spec(INT, _cc(0, 2**31 - 1)),
-    "plant.encoder_bits": Spec(INT, _cc(0, 24)),
-    "plant.measurement_delay_s": _real(_cc(0, Ref("controller.dt_s"))),
-    "target.name": _choice(TARGETS),
-    "target.placement": _choice(PLACEMENTS),
+    "plant.actuation_delay_periods": Spec(INT, closed(0, 2)),
+    "plant.rs_ohm": real_spec(open_closed(0, 100)),
+    "plant.ld_h": real_spec(open_closed(0, 1)),
+    "plant.lq_h": real_spec(open_closed(0, 1)),
+    "plant.psi_f_wb": real_spec(open_closed(0, 10)),
+    "plant.j_kgm2": real_spec(open_closed(0, 1e3)),
+    "plant.b_nms": real_spec(closed(0, 1e3)),
+    "plant.udc_v": real_spec(open_closed(0, 1e4)),
+    "plant.dead_time_s": real_spec(closed(0, Ref("controller.dt_s", 0.1, "dt_s/10"))),
+    "plant.device_drop_v": real_spec(closed(0, 50)),
+    "plant.current_gain_error": real_spec(closed(-0.5, 0.5)),
+    "plant.current_offset_a": real_spec(closed(Ref("inverter.i_trip_a", -1.0, "-i_trip_a"), Ref("inverter.i_trip_a"))),
+    "plant.adc_bits": Spec(INT, closed(0, 24)),
+    "plant.adc_full_scale_a": real_spec(open_closed(0, 1e5)),
+    "plant.noise_a": real_spec(closed(0, Ref("inverter.i_trip_a"))),
+    "plant.noise_seed": Spec(INT, closed(0, 2**31 - 1)),
+    "plant.encoder_bits": Spec(INT, closed(0, 24)),
+    "plant.measurement_delay_s": real_spec(closed(0, Ref("controller.dt_s"))),
+    "target.name": choice_spec(TARGETS),
+    "target.placement": choice_spec(PLACEMENTS),
 }
 
 # Which dataclass holds each section's fields (for defaults and building the
@@ -310,17 +305,81 @@ def _attr_of(path: str) -> str:
     return _ATTR_NAME.get(path, _key_of(path))
 
 
-SECTIONS: tuple[str, ...] = tuple(dict.fromkeys(_section_of(p) for p in SCHEMA))
+class TopologySection(Protocol):
+    """A topology's part of the configuration: the module ``<package>.section`` of its plugin package
+    (:mod:`codegen.registry`), read while a file is loaded."""
+
+    #: every strategy, in report order; the first is the baseline the others are compared to
+    strategies: tuple[str, ...]
+    #: the fields only this topology has, in check order (checked after :data:`COMMON_SCHEMA`)
+    fields: Mapping[str, Spec]
+    #: common fields whose allowed values this topology narrows (or widens)
+    narrowed: Mapping[str, Spec]
+
+    def check(self, values: Mapping[str, object], fail: Callable[[str, object, str], NoReturn]) -> None:
+        """Consistency between fields, once every field passed its own check (``fail(field, value,
+        allowed)`` raises the one-line error)."""
+        ...
+
+    def operating_findings(self, model: Model) -> list[Finding]:
+        """The topology's own operating-point findings (after the common ones)."""
+        ...
+
+    def resolve(self, model: Model) -> Model:
+        """The model with the artefacts its config names read in (pure of compilers and runs)."""
+        ...
 
 
-def _fields_of(section: str) -> list[str]:
+@functools.cache
+def topology_section(name: str) -> TopologySection:
+    """The config section module of topology ``name`` (a registry value)."""
+    section: TopologySection = topology_module(name, "section")  # type: ignore[assignment]
+    return section
+
+
+def strategies_of(topology: str) -> tuple[str, ...]:
+    """The strategies of ``topology``, in report order."""
+    return topology_section(topology).strategies
+
+
+@functools.cache
+def schema_for(topology: str) -> dict[str, Spec]:
+    """Every field of a config of ``topology``, in check order: the common ones (narrowed where the
+    topology narrows them, ``controller.strategy`` one of its strategies), then its own."""
+    section = topology_section(topology)
+    common = {**COMMON_SCHEMA, **section.narrowed,
+              "controller.strategy": choice_spec(section.strategies)}
+    return {**{p: common[p] for p in COMMON_SCHEMA}, **section.fields}
+
+
+@functools.cache
+def all_fields() -> dict[str, Spec]:
+    """Every field any topology has (the first topology's spec where two narrow one differently)."""
+    out: dict[str, Spec] = {}
+    for name in topology_names():
+        for path, spec in schema_for(name).items():
+            out.setdefault(path, spec)
+    return out
+
+
+def owners(path: str) -> tuple[str, ...]:
+    """The topologies whose configs have field ``path`` (every one for a common field)."""
+    return tuple(t for t in topology_names() if path in schema_for(t))
+
+
+def _sections(schema: Mapping[str, Spec]) -> tuple[str, ...]:
+    """The dotted sections of ``schema``'s fields, in order."""
+    return tuple(dict.fromkeys(_section_of(p) for p in schema))
+
+
+def _fields_of(schema: Mapping[str, Spec], section: str) -> list[str]:
     """TOML keys of the fields directly in ``section``."""
-    return [_key_of(p) for p in SCHEMA if _section_of(p) == section]
+    return [_key_of(p) for p in schema if _section_of(p) == section]
 
 
-def _subsections_of(section: str) -> list[str]:
+def _subsections_of(schema: Mapping[str, Spec], section: str) -> list[str]:
     """Names of the tables directly inside ``section`` ("" is the top level)."""
-    return [_key_of(s) for s in SECTIONS if _section_of(s) == section]
+    return [_key_of(s) for s in _sections(schema) if _section_of(s) == section]
 
 
 def _default(path: str) -> object:
@@ -336,9 +395,14 @@ def _default(path: str) -> object:
     raise LookupError(f"schema field {path} has no model attribute {attr}")
 
 
-def _required(section: str) -> bool:
-    """A section is required if it has a field without a default."""
-    return any(_default(f"{section}.{k}") is MISSING for k in _fields_of(section))
+def _is_required(schema: Mapping[str, Spec], path: str) -> bool:
+    """The file must give ``path``: the spec says so, or the model has no default."""
+    return schema[path].required or _default(path) is MISSING
+
+
+def _required(schema: Mapping[str, Spec], section: str) -> bool:
+    """A section is required if it has a required field."""
+    return any(_is_required(schema, f"{section}.{k}") for k in _fields_of(schema, section))
 
 
 # --------------------------------------------------------------------------
@@ -405,6 +469,9 @@ def _check_int(ck: _Checker, path: str, value: object, spec: Spec) -> int | None
 def _check_bool(ck: _Checker, path: str, value: object, spec: Spec) -> bool:
     if not isinstance(value, bool):
         ck.fail(path, value, "must be true or false")
+    if spec.choices and value not in spec.choices:
+        only = " or ".join(str(c).lower() for c in spec.choices)
+        ck.fail(path, value, f"{spec.hint}; allowed: {only}" if spec.hint else f"must be {only}")
     return value
 
 
@@ -440,7 +507,7 @@ def _check_name(ck: _Checker, path: str, value: object, spec: Spec) -> str:
 
 
 def _check_choice(ck: _Checker, path: str, value: object, spec: Spec) -> str:
-    options = ", ".join(spec.choices)
+    options = ", ".join(map(str, spec.choices))
     allowed = f"{spec.hint}, allowed: {options}" if spec.hint else f"must be one of {options}"
     if not isinstance(value, str):
         ck.fail(path, value, f"must be a string; {allowed}")
@@ -500,84 +567,24 @@ _CHECKS: dict[str, Callable[[_Checker, str, object, Spec], object]] = {
 # consistency between fields
 
 
-def _check_topology(ck: _Checker) -> None:
-    v = ck.values
-    strategy, topology = v["controller.strategy"], v["inverter.topology"]
-    needed = next(t for t, group in STRATEGIES_BY_TOPOLOGY.items() if strategy in group)
-    fitting = STRATEGIES_BY_TOPOLOGY[needed]
-    if topology != needed:
-        others = STRATEGIES_BY_TOPOLOGY[str(topology)]
-        ck.fail(
-            "controller.strategy",
-            strategy,
-            f"strategy {strategy} needs inverter.topology = '{needed}' but inverter.topology = "
-            f"'{topology}'; strategies for '{topology}': {', '.join(others)} "
-            f"(for '{needed}': {', '.join(fitting)})",
-        )
-
-
-def _check_surface_pmsm(ck: _Checker) -> None:
-    """Ld == Lq where the model needs a surface PMSM: T-type MPDTC and the flux-geometry predictor."""
-    v = ck.values
-    if v["motor.ld_h"] == v["motor.lq_h"]:
+def _check_foreign_value(ck: _Checker, schema: Mapping[str, Spec], path: str, value: object) -> None:
+    """A choice another topology allows but this one does not: say whose it is (before the field check)."""
+    spec = schema[path]
+    if spec.kind != CHOICE or value in spec.choices or not isinstance(value, str):
         return
-    inductances = f"motor.ld_h = {_num(float(v['motor.ld_h']))}, motor.lq_h = {_num(float(v['motor.lq_h']))}"  # type: ignore[arg-type]
-    if v["inverter.topology"] == "t-type":
-        ck.fail("controller.strategy", v["controller.strategy"],
-                f"t-type MPDTC needs Ld == Lq (surface PMSM model); {inductances}")
-    if v["controller.predictor"] == "flux-geometry":
-        ck.fail("controller.predictor", v["controller.predictor"],
-                'flux-geometry predictor needs Ld == Lq (surface PMSM); use predictor = "dq-euler" '
-                f"({inductances})")
-
-
-def _check_tables_file(ck: _Checker) -> None:
-    v = ck.values
-    if v["controller.tables_file"] is None:
-        return
-    if v["inverter.topology"] != "two-level" or v["controller.tables"] != "derived":
-        ck.fail("controller.tables_file", v["controller.tables_file"],
-                "names the switch tables derived by a training run, which only a two-level config with "
-                f"controller.tables = 'derived' uses (inverter.topology = '{v['inverter.topology']}', "
-                f"controller.tables = '{v['controller.tables']}')")
-
-
-def _check_scenario_set(ck: _Checker) -> None:
-    """``scenario.set = "mpdtc-table5"`` is the T-type (MPDTC) paper's run set: t-type only."""
-    v = ck.values
-    if v["scenario.set"] == "mpdtc-table5" and v["inverter.topology"] != "t-type":
-        ck.fail("scenario.set", v["scenario.set"],
-                "the MPDTC paper's Table 5 set runs a t-type inverter; inverter.topology = "
-                f"'{v['inverter.topology']}' runs this config's scenario: use scenario.set = 'config'")
-
-
-def _check_two_level_controller(ck: _Checker) -> None:
-    """``controller.psi_ref`` and ``controller.cost`` choose the two-level MPTC's flux reference and
-    cost; the T-type MPDTC has its own (MTPA flux reference, cost eq. (7)): a t-type config that sets
-    them to anything but their defaults is refused rather than silently ignored."""
-    v = ck.values
-    if v["inverter.topology"] == "t-type":
-        for path in ("controller.psi_ref", "controller.cost"):
-            own = _default(path)
-            if v[path] != own:
-                ck.fail(path, v[path], f"two-level MPTC only; the t-type MPDTC takes its flux reference from "
-                                       f"MTPA and its cost from eq. (7): leave {path} = '{own}'")
-
-
-_CONSISTENCY: tuple[Callable[[_Checker], None], ...] = (
-    _check_topology,
-    _check_scenario_set,
-    _check_tables_file,
-    _check_surface_pmsm,
-    _check_two_level_controller,
-)
+    topology = ck.values["inverter.topology"]
+    theirs = [t for t in topology_names()
+              if t != topology and path in schema_for(t) and value in schema_for(t)[path].choices]
+    if theirs:
+        ck.fail(path, value, f"belongs to inverter.topology = '{theirs[0]}', but inverter.topology = "
+                             f"'{topology}'; allowed for '{topology}': {', '.join(map(str, spec.choices))}")
 
 
 # --------------------------------------------------------------------------
 # reading, structure, overrides
 
 
-def _read_toml(file: str) -> dict:
+def _read_toml(file: str) -> dict[str, Any]:
     """Parse the file; any failure is a ConfigError on field ``(file)``."""
     try:
         blob = Path(file).read_bytes()
@@ -594,10 +601,39 @@ def _read_toml(file: str) -> dict:
             file, FILE_FIELD, Marker("<binary data>"),
             f"not TOML: not UTF-8 text (byte {blob[exc.start]:#04x} at offset {exc.start})",
         ) from exc
+    if text.startswith("\ufeff"):
+        raise ConfigError(file, FILE_FIELD, Marker("<byte-order mark>"),
+                          "not TOML: the file starts with a UTF-8 byte-order mark (BOM), which TOML does not "
+                          "allow; save it as UTF-8 without BOM")
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(file, FILE_FIELD, _offending_line(text, str(exc)), f"not TOML: {exc}") from exc
+        raise ConfigError(file, FILE_FIELD, _offending_line(text, str(exc)),
+                          f"not TOML: {exc}{_lookalike_hint(text, str(exc))}") from exc
+
+
+#: characters that look like TOML syntax but are not ASCII, with the ASCII they stand for
+_LOOKALIKES: dict[str, str] = {
+    "\u2212": "-", "\u2013": "-", "\u2014": "-", "\u2010": "-", "\u2011": "-", "\u00a0": " ", "\u2009": " ",
+    "\u202f": " ", "\u201c": '"', "\u201d": '"', "\u2018": "'", "\u2019": "'", "\uff1d": "=", "\u00d7": "*",
+}
+
+
+def _lookalike_hint(text: str, message: str) -> str:
+    """``; line N column C is U+2212 MINUS SIGN, not '-'`` when the line a TOML error names holds a
+    character that only looks like TOML syntax (pasted from a document)."""
+    import unicodedata
+
+    m = re.search(r"at line (\d+)", message)
+    lines = text.splitlines()
+    if not m or not 1 <= int(m.group(1)) <= len(lines):
+        return ""
+    line = lines[int(m.group(1)) - 1]
+    for col, ch in enumerate(line, start=1):
+        if ch in _LOOKALIKES:
+            return (f"; line {m.group(1)} column {col} is U+{ord(ch):04X} {unicodedata.name(ch, '?')}, "
+                    f"not the ASCII {_LOOKALIKES[ch]!r} it looks like")
+    return ""
 
 
 def _offending_line(text: str, message: str) -> object:
@@ -609,7 +645,7 @@ def _offending_line(text: str, message: str) -> object:
     return Marker("<not TOML>")
 
 
-def _apply_overrides(ck: _Checker, data: dict, overrides: Mapping[str, object]) -> None:
+def _apply_overrides(ck: _Checker, data: dict[str, Any], overrides: Mapping[str, object]) -> None:
     """Set each dotted ``section.field`` in the parsed document (in place)."""
     for key, value in overrides.items():
         parts = key.split(".")
@@ -623,7 +659,7 @@ def _apply_overrides(ck: _Checker, data: dict, overrides: Mapping[str, object]) 
         node[parts[-1]] = value
 
 
-def _lookup_table(ck: _Checker, data: dict, section: str) -> dict | None:
+def _lookup_table(ck: _Checker, data: dict[str, Any], section: str) -> dict[str, Any] | None:
     """The table for a dotted section, None if absent, error if not a table."""
     node: object = data
     for part in section.split("."):
@@ -635,49 +671,77 @@ def _lookup_table(ck: _Checker, data: dict, section: str) -> dict | None:
     return node
 
 
-def _check_keys(ck: _Checker, section: str, table: dict) -> None:
-    """Reject keys that are neither fields nor sub-sections of ``section``."""
-    fields, subs = _fields_of(section), _subsections_of(section)
+def _foreign(path: str) -> str | None:
+    """The topologies that have ``path`` as a field or a section, as text (None: no topology has it)."""
+    theirs = [t for t in topology_names()
+              if path in schema_for(t) or any(p.startswith(path + ".") for p in schema_for(t))]
+    return " or ".join(f"'{t}'" for t in theirs) or None
+
+
+def _check_keys(ck: _Checker, schema: Mapping[str, Spec], section: str, table: dict[str, Any]) -> None:
+    """Reject keys that are neither fields nor sub-sections of ``section``; a key another topology has
+    is named as that topology's."""
+    fields, subs = _fields_of(schema, section), _subsections_of(schema, section)
     known = fields + subs
     for key, value in table.items():
         if key in known:
             continue
+        path = f"{section}.{key}" if section else key
+        theirs = _foreign(path)
+        if theirs is not None:
+            topology = ck.values["inverter.topology"]
+            ck.fail(path, value, f"belongs to inverter.topology = {theirs}; a '{topology}' config has no "
+                                 f"such field: remove it")
         guess = difflib.get_close_matches(key, known, n=1)
         maybe = f" (did you mean '{guess[0]}'?)" if guess else ""
         if section:
             tables = f"; sections: {', '.join(f'[{section}.{s}]' for s in subs)}" if subs else ""
-            ck.fail(f"{section}.{key}", value,
+            ck.fail(path, value,
                     f"unknown field in [{section}]{maybe}; allowed fields: {', '.join(fields)}{tables}")
         ck.fail(key, value, f"unknown section{maybe}; allowed sections: {', '.join(subs)}")
 
 
-def _collect(ck: _Checker, data: dict) -> dict[str, object]:
+def _topology(ck: _Checker, data: dict[str, Any]) -> str:
+    """``inverter.topology``, checked first: it decides which fields the file may have."""
+    inverter = _lookup_table(ck, data, "inverter")
+    value = (inverter or {}).get("topology", MISSING)
+    if value is MISSING:
+        ck.fail("inverter.topology", MISSING, f"required field missing in [inverter]; allowed: "
+                                              f"{', '.join(topology_names())}")
+    name: str = _check_choice(ck, "inverter.topology", value, COMMON_SCHEMA["inverter.topology"])
+    ck.values["inverter.topology"] = name
+    return name
+
+
+def _collect(ck: _Checker, schema: Mapping[str, Spec], data: dict[str, Any]) -> dict[str, object]:
     """Check the document's structure; return raw values by dotted path (defaults filled in)."""
-    _check_keys(ck, "", data)
+    _check_keys(ck, schema, "", data)
     raw: dict[str, object] = {}
-    for section in SECTIONS:
+    sections = _sections(schema)
+    for section in sections:
         table = _lookup_table(ck, data, section)
         if table is None:
-            if _required(section):
+            if _required(schema, section):
                 ck.fail(section, MISSING, f"required section [{section}] is missing; "
-                        f"sections: {', '.join(f'[{s}]' for s in SECTIONS)}")
+                        f"sections: {', '.join(f'[{s}]' for s in sections)}")
             table = {}
         else:
-            _check_keys(ck, section, table)
-        for key in _fields_of(section):
+            _check_keys(ck, schema, section, table)
+        for key in _fields_of(schema, section):
             path = f"{section}.{key}"
-            raw[path] = table[key] if key in table else _default(path)
-            if raw[path] is MISSING:
+            if key not in table and _is_required(schema, path):
                 ck.fail(path, MISSING, f"required field missing in [{section}]; "
-                        f"fields: {', '.join(_fields_of(section))}")
+                        f"fields: {', '.join(_fields_of(schema, section))}")
+            raw[path] = table[key] if key in table else _default(path)
     return raw
 
 
 def _build(values: Mapping[str, object], source: str) -> Model:
-    """Assemble the frozen Model from checked values."""
+    """Assemble the frozen Model from checked values (a field the topology does not have keeps the
+    model's default)."""
 
     def kw(section: str) -> dict[str, Any]:
-        return {_attr_of(p): values[p] for p in SCHEMA if _section_of(p) == section}
+        return {_attr_of(p): v for p, v in values.items() if _section_of(p) == section}
 
     return Model(
         **kw("meta"),
@@ -714,13 +778,17 @@ def load_config(path: str | Path, overrides: Mapping[str, object] | None = None)
     data = _read_toml(source)
     ck = _Checker(source, frozenset(overrides))
     _apply_overrides(ck, data, overrides)
-    raw = _collect(ck, data)
-    for field_path, spec in SCHEMA.items():
+    topology = _topology(ck, data)
+    schema = schema_for(topology)
+    section = topology_section(topology)
+    raw = _collect(ck, schema, data)
+    for field_path, spec in schema.items():
+        _check_foreign_value(ck, schema, field_path, raw[field_path])
         ck.values[field_path] = _CHECKS[spec.kind](ck, field_path, raw[field_path], spec)
-    for check in _CONSISTENCY:
-        check(ck)
-    model = _build(ck.values, source)
-    findings = operating_findings(model)
+    section.check(ck.values, ck.fail)
+    model = section.resolve(_build(ck.values, source))
+    findings = operating_findings(model) + section.operating_findings(model)
+    findings.sort(key=lambda f: not f.error)
     for f in findings:
         if f.error:
             ck.fail(f.field, f.value, f.text)

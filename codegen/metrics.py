@@ -376,6 +376,8 @@ def f_ave_hz(sw: Any, duration_s: float, sw_initial: int = 0) -> float:
     two switch changes (upper and lower), hence f_ave = leg changes /
     (3 * duration_s): leg commutations per second per leg.
     """
+    if not duration_s > 0.0:
+        return math.nan  # an empty window has no frequency
     return leg_commutations(sw, sw_initial) / (3.0 * duration_s)
 
 

@@ -12,36 +12,30 @@ import dataclasses
 import hashlib
 import json
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import Any, Literal, get_args
 
-Topology = Literal["two-level", "t-type"]
-Strategy = Literal["conventional", "s1", "s2", "s3", "mpdtc27", "mpdtc63"]
+#: ``inverter.topology``: a value of :data:`codegen.registry.TOPOLOGY_PACKAGES`
+Topology = str
+#: ``controller.strategy``: one of the topology's strategies (its ``section.strategies``)
+Strategy = str
 Predictor = Literal["flux-geometry", "dq-euler"]
 TableSource = Literal["derived", "published"]
 Target = Literal["host", "stm32h743", "tms320f28377"]
 SpeedMode = Literal["mechanical", "imposed"]
 FaultAction = Literal["gates-off", "active-short-circuit"]
-ScenarioSet = Literal["config", "mpdtc-table5"]
+#: ``scenario.set``: "config", or a run set of the topology's (its ``section.narrowed``)
+ScenarioSet = str
 Placement = Literal["tcm", "default"]
 PsiRef = Literal["constant", "mtpa"]
 CostForm = Literal["rated", "reference"]
 
-#: The strategies of each topology, in report order (the first is the baseline).
-STRATEGIES_BY_TOPOLOGY: dict[str, tuple[str, ...]] = {
-    "two-level": ("conventional", "s1", "s2", "s3"),
-    "t-type": ("mpdtc27", "mpdtc63"),
-}
-PREDICTORS: tuple[str, ...] = ("flux-geometry", "dq-euler")
-TABLE_SOURCES: tuple[str, ...] = ("derived", "published")
-TARGETS: tuple[str, ...] = ("host", "stm32h743", "tms320f28377")
-FAULT_ACTIONS: tuple[str, ...] = ("gates-off", "active-short-circuit")
-SCENARIO_SETS: tuple[str, ...] = ("config", "mpdtc-table5")
-PLACEMENTS: tuple[str, ...] = ("tcm", "default")
-NUMBER_FORMATS: tuple[str, ...] = ("float32", "fixed")
+TARGETS: tuple[str, ...] = get_args(Target)
+FAULT_ACTIONS: tuple[str, ...] = get_args(FaultAction)
+PLACEMENTS: tuple[str, ...] = get_args(Placement)
 #: two-level flux reference psi*: controller.psi_ref_wb, or MTPA from the torque reference
-PSI_REFS: tuple[str, ...] = ("constant", "mtpa")
+PSI_REFS: tuple[str, ...] = get_args(PsiRef)
 #: two-level cost normalisation of the torque error: rated torque, or the torque reference (seed 001 eq. (5))
-COST_FORMS: tuple[str, ...] = ("rated", "reference")
+COST_FORMS: tuple[str, ...] = get_args(CostForm)
 
 
 @dataclass(frozen=True)
@@ -68,7 +62,8 @@ class Inverter:
     udc_min_v: float
     udc_max_v: float
     i_trip_a: float
-    c_f: float = 1000e-6  # each DC-link capacitor (t-type only)
+    #: each DC-link capacitor, F (a three-level topology's field; the others keep the default)
+    c_f: float = 1000e-6
 
 
 @dataclass(frozen=True)
@@ -81,20 +76,31 @@ class Derivation:
 
 @dataclass(frozen=True)
 class Controller:
-    """What the generated step computes."""
+    """What the generated step computes.
+
+    One dataclass for every topology: a field that only some topologies have
+    (each topology's ``section.fields``) is refused in a config of another
+    and keeps its default there, where nothing reads it.
+    """
 
     strategy: Strategy
-    predictor: Predictor
     delay_compensation: bool
-    tables: TableSource
     dt_s: float
-    psi_ref_wb: float
-    eps_t_nm: float
+    # two-level MPTC (the section marks these required)
+    predictor: Predictor = "flux-geometry"
+    tables: TableSource = "derived"
+    psi_ref_wb: float = 0.0
+    eps_t_nm: float = 0.0
     number_format: str = "float32"
     #: fixed point only: one global Q (IQmath style, values in SI units); None: per-signal formats
     fixed_q: int | None = None
     #: s2/s3 switch tables written by ``mpcgen tables --derive`` (relative to the config's folder)
     tables_file: str | None = None
+    #: the trained switch tables, loaded (not a config field): read from ``tables_file`` when the config is
+    #: loaded, or put here by the training stage (``codegen.topologies.twolevel.tables_file.load_into``):
+    #: (SHA-256 of the file, ((strategy, table), ...)), table[condition][sector] = candidate vectors; in
+    #: the config hash as the SHA-256 alone; None: none loaded
+    trained_tables: tuple[str, tuple[tuple[str, tuple[tuple[tuple[int, ...], ...], ...]], ...]] | None = None
     derivation: Derivation = field(default_factory=Derivation)
     # three-level MPDTC only (mpdtc-three-level.md, eq. (7) and (10)-(11))
     lambda_psi_nm_per_wb: float = 28.0
@@ -222,11 +228,15 @@ class Model:
             self, controller=dataclasses.replace(self.controller, **fields)  # type: ignore[arg-type]
         )
 
-    def as_dict(self) -> dict:
-        """Plain-dict view (for JSON reports); ``source`` and ``warnings`` are left out."""
+    def as_dict(self) -> dict[str, Any]:
+        """Plain-dict view (for JSON reports); ``source`` and ``warnings`` are left out, trained tables
+        stand as their file's SHA-256."""
         d = dataclasses.asdict(self)
         d.pop("source", None)
         d.pop("warnings", None)
+        trained = d["controller"].pop("trained_tables")
+        if trained is not None:  # the file's SHA-256 stands for them (a model without them hashes as before)
+            d["controller"]["trained_tables_sha256"] = trained[0]
         return d
 
     def config_hash(self) -> str:

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 from codegen.model import Model
 
-__all__ = ["Finding", "operating_findings"]
+__all__ = ["Finding", "operating_findings", "g4"]
 
 
 @dataclass(frozen=True)
@@ -32,13 +32,15 @@ class Finding:
     error: bool
 
 
-def _g(x: float) -> str:
+def g4(x: float) -> str:
+    """Four significant digits, for messages."""
     return f"{x:.4g}"
 
 
 def operating_findings(model: Model) -> list[Finding]:
-    """Every inconsistency of ``model``'s operating point, errors first."""
-    m, inv, c, sl = model.motor, model.inverter, model.controller, model.speed_loop
+    """Every inconsistency of ``model``'s operating point that every topology shares, errors first (a
+    topology adds its own: ``TopologySection.operating_findings``)."""
+    m, inv, sl = model.motor, model.inverter, model.speed_loop
     k_t = 1.5 * m.pole_pairs * m.psi_f_wb
     i_rated = m.rated_torque_nm / k_t
     w_e = m.rated_speed_rpm * 2.0 * math.pi / 60.0 * m.pole_pairs
@@ -47,27 +49,21 @@ def operating_findings(model: Model) -> list[Finding]:
     out: list[Finding] = []
     if inv.i_trip_a < i_rated:
         out.append(Finding("inverter.i_trip_a", inv.i_trip_a,
-                           f"below the rated current {_g(i_rated)} A (T_rated / (1.5 p psi_f)): "
+                           f"below the rated current {g4(i_rated)} A (T_rated / (1.5 p psi_f)): "
                            "rated torque would trip the current guard", True))
     emf = w_e * m.psi_f_wb
     if emf > v_six_step:
         n_max = v_six_step / (m.psi_f_wb * m.pole_pairs) * 60.0 / (2.0 * math.pi)
         out.append(Finding("inverter.udc_v", inv.udc_v,
-                           f"too low for the back-EMF at rated speed: omega_e psi_f = {_g(emf)} V > 2 Udc/pi = "
-                           f"{_g(v_six_step)} V; the motor cannot exceed about {_g(n_max)} r/min", True))
+                           f"too low for the back-EMF at rated speed: omega_e psi_f = {g4(emf)} V > 2 Udc/pi = "
+                           f"{g4(v_six_step)} V; the motor cannot exceed about {g4(n_max)} r/min", True))
     elif emf > v_linear:
         out.append(Finding("inverter.udc_v", inv.udc_v,
-                           f"little voltage margin: back-EMF at rated speed {_g(emf)} V > Udc/sqrt(3) = "
-                           f"{_g(v_linear)} V; torque control degrades near rated speed", False))
-    if model.inverter.topology == "two-level":  # the MPDTC of the t-type derives psi* itself (MTPA)
-        v_flux = w_e * c.psi_ref_wb
-        if v_flux > v_six_step:
-            out.append(Finding("controller.psi_ref_wb", c.psi_ref_wb,
-                               f"needs omega_e psi* = {_g(v_flux)} V at rated speed, more than the inverter "
-                               f"gives (2 Udc/pi = {_g(v_six_step)} V)", True))
+                           f"little voltage margin: back-EMF at rated speed {g4(emf)} V > Udc/sqrt(3) = "
+                           f"{g4(v_linear)} V; torque control degrades near rated speed", False))
     i_limit = sl.limit_nm / k_t
     if i_limit > inv.i_trip_a:
         out.append(Finding("speed_loop.limit_nm", sl.limit_nm,
-                           f"asks for about {_g(i_limit)} A (limit / (1.5 p psi_f)), above inverter.i_trip_a = "
-                           f"{_g(inv.i_trip_a)} A: accelerations at the limit will trip the guard", False))
+                           f"asks for about {g4(i_limit)} A (limit / (1.5 p psi_f)), above inverter.i_trip_a = "
+                           f"{g4(inv.i_trip_a)} A: accelerations at the limit will trip the guard", False))
     return sorted(out, key=lambda f: not f.error)

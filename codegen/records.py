@@ -21,6 +21,7 @@ import hashlib
 import zlib
 from dataclasses import dataclass
 from functools import cached_property
+from typing import Any
 
 import numpy as np
 
@@ -236,7 +237,7 @@ class RecordLayout:
         """CRC-32 of each record's values (compact expected outputs)."""
         return [zlib.crc32(row.tobytes()) & 0xFFFFFFFF for row in self.pack(records)]
 
-    def rows(self, records: np.ndarray) -> list[dict]:
+    def rows(self, records: np.ndarray) -> list[dict[str, Any]]:
         """Plain Python rows (float32 values as exact Python floats), for templates."""
         cols = {f.name: records[f.name].tolist() for f in self.fields}
         return [{f.name: cols[f.name][i] for f in self.fields} for i in range(len(records))]

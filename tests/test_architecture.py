@@ -1,12 +1,15 @@
 """Architecture rules, checked on the syntax tree (comments and docstrings do not count).
 
-1. The stages (codegen/stages/*.py, codegen/cli.py, codegen/topology.py) hold no
-   topology branch: no string naming a topology ("two-level", "t-type") or a
-   topology package, no ``isinstance`` test on a tables class, no import of
-   ``codegen.topologies``, no identifier naming a topology (TwoLevelTables,
-   ThreeLevelTables, twolevel, ttype, ...).  The one exception is the plugin
-   registry ``TOPOLOGIES`` in codegen/topology.py, which maps each
-   ``inverter.topology`` value to its plugin module.
+1. No module of codegen/ outside the plugins (codegen/topologies/) and no module
+   of hil/ names a topology, a strategy or a plugin package: no string naming a
+   topology ("two-level", "t-type"), a topology package or a strategy
+   ("conventional", "mpdtc63", ...), no ``isinstance`` test on a tables class,
+   no import of ``codegen.topologies``, no identifier naming a topology
+   (TwoLevelTables, ThreeLevelTables, twolevel, ttype, ...).  The one exception
+   is the registry ``TOPOLOGY_PACKAGES`` in codegen/registry.py, which maps each
+   ``inverter.topology`` value to its plugin package.  The stages
+   (codegen/stages/*.py, codegen/cli.py, codegen/topology.py) name no number
+   format either.
 2. No topology package imports another (nor names another's modules in a string).
 
 The checker is tested on small snippets too, so that a rule that silently
@@ -21,12 +24,17 @@ from pathlib import Path
 
 import pytest
 
+from codegen.config import strategies_of
 from codegen.numfmt import FORMATS
+from codegen.registry import topology_names
 
 from conftest import ROOT
 
 CODEGEN = ROOT / "codegen"
 STAGE_FILES = sorted((CODEGEN / "stages").glob("*.py")) + [CODEGEN / "cli.py", CODEGEN / "topology.py"]
+#: every module that must not name a topology or a strategy: codegen/ outside the plugins, and hil/
+NAMING_FILES = sorted(p for p in CODEGEN.rglob("*.py") if "topologies" not in p.relative_to(CODEGEN).parts) + \
+    sorted((ROOT / "hil").rglob("*.py"))
 TOPOLOGY_PACKAGES = sorted(p.parent.name for p in (CODEGEN / "topologies").glob("*/__init__.py"))
 
 #: string fragments that name a topology or a topology package
@@ -34,10 +42,12 @@ TOPOLOGY_STRINGS = ("two-level", "t-type", "codegen.topologies")
 #: identifier word sequences that name a topology (after splitting at "_" and camelCase)
 TOPOLOGY_WORDS = (("two", "level"), ("twolevel",), ("three", "level"), ("threelevel",), ("t", "type"),
                   ("ttype",), ("tlevel",), ("3l",), ("2l",))
+#: strategies by name (every topology's)
+STRATEGY_NAMES = tuple(s for t in topology_names() for s in strategies_of(t))
 #: number formats by name: a stage asks the format (``quantised``, the report's roles), never its name
 FORMAT_NAMES = tuple(FORMATS)
-#: the registry: the one assignment in codegen/topology.py allowed to name topologies
-REGISTRY = (CODEGEN / "topology.py", "TOPOLOGIES")
+#: the registry: the one assignment allowed to name topologies
+REGISTRY = (CODEGEN / "registry.py", "TOPOLOGY_PACKAGES")
 
 
 @dataclass(frozen=True)
@@ -125,8 +135,10 @@ def _is_tables_class(node: ast.AST) -> bool:
     return any(re.search(r"Tables$", name) for n in ast.walk(node) for name in _identifiers(n))
 
 
-def stage_findings(source: str, path: str, module: str, registry: str | None = None) -> list[Finding]:
-    """Topology branches in the stage module ``module`` with text ``source``."""
+def stage_findings(source: str, path: str, module: str, registry: str | None = None,
+                   formats: bool = True) -> list[Finding]:
+    """Topology branches in the stage module ``module`` with text ``source`` (``formats``: number-format
+    names count too)."""
     tree = ast.parse(source)
     skip = _docstrings(tree) | (_registry_nodes(tree, registry) if registry else set())
     found: list[Finding] = []
@@ -139,8 +151,10 @@ def stage_findings(source: str, path: str, module: str, registry: str | None = N
             for frag in TOPOLOGY_STRINGS:
                 if frag in low:
                     found.append(Finding(path, line, "topology string", repr(node.value)))
-            if node.value in FORMAT_NAMES:
+            if formats and node.value in FORMAT_NAMES:
                 found.append(Finding(path, line, "number-format name", repr(node.value)))
+            if node.value in STRATEGY_NAMES:
+                found.append(Finding(path, line, "strategy name", repr(node.value)))
         for mod in _imported_modules(node, module):
             if mod == "codegen.topologies" or mod.startswith("codegen.topologies."):
                 found.append(Finding(path, line, "topology import", mod))
@@ -186,18 +200,32 @@ def test_the_stage_list_is_not_empty():
 
 @pytest.mark.parametrize("path", STAGE_FILES, ids=lambda p: str(p.relative_to(CODEGEN)))
 def test_stage_has_no_topology_branch(path: Path):
+    found = stage_findings(path.read_text(), str(path.relative_to(ROOT)), _module_name(path))
+    assert not found, "\n".join(map(str, found))
+
+
+def test_the_naming_list_covers_codegen_and_hil():
+    names = {str(p.relative_to(ROOT)) for p in NAMING_FILES}
+    assert {"codegen/config.py", "codegen/model.py", "codegen/operating.py", "codegen/registry.py",
+            "hil/closedloop.py", "hil/onboard.py", "hil/codecgen.py", "hil/cli.py"} <= names
+    assert not any(n.startswith("codegen/topologies/") for n in names)
+
+
+@pytest.mark.parametrize("path", NAMING_FILES, ids=lambda p: str(p.relative_to(ROOT)))
+def test_no_module_outside_the_plugins_names_a_topology(path: Path):
     registry = REGISTRY[1] if path == REGISTRY[0] else None
-    found = stage_findings(path.read_text(), str(path.relative_to(ROOT)), _module_name(path), registry)
+    found = stage_findings(path.read_text(), str(path.relative_to(ROOT)), _module_name(path), registry,
+                           formats=False)
     assert not found, "\n".join(map(str, found))
 
 
 def test_the_registry_names_every_topology_package():
-    """The exemption is for the registry only: it must exist and map to plugin modules."""
+    """The exemption is for the registry only: it must exist and map to plugin packages."""
     tree = ast.parse(REGISTRY[0].read_text())
     nodes = _registry_nodes(tree, REGISTRY[1])
     values = [n.value for n in ast.walk(tree) if id(n) in nodes and isinstance(n, ast.Constant)]
     for package in TOPOLOGY_PACKAGES:
-        assert f"codegen.topologies.{package}.plugin" in values
+        assert f"codegen.topologies.{package}" in values
 
 
 @pytest.mark.parametrize("package", TOPOLOGY_PACKAGES)
@@ -231,6 +259,8 @@ STAGE = "codegen.stages.example"
     ("def run(m, ttype=None):\n    return ttype\n", "topology name"),
     ("def run(m):\n    return m.sim3l\n", "topology name"),
     ("def run(twolevel):\n    return twolevel\n", "topology name"),
+    ('def run(model):\n    return model.controller.strategy == "mpdtc63"\n', "strategy name"),
+    ('def run(model):\n    return model.controller.strategy in ("s2", "s3")\n', "strategy name"),
 ])
 def test_checker_finds_a_branch(snippet: str, rule: str):
     found = stage_findings(snippet, "example.py", STAGE)

@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from codegen import model as model_module
-from codegen.config import SCHEMA, load_config, parse_override
+from codegen.config import all_fields, load_config, parse_override
 from codegen.errors import ConfigError, MpcgenError
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
@@ -133,9 +133,8 @@ def test_optional_fields_and_sections_take_model_defaults(tmp_path: Path) -> Non
 
 def test_valid_ttype_config(tmp_path: Path) -> None:
     path = write_config(tmp_path, {
-        "inverter.topology": "t-type", "controller.strategy": "mpdtc63",
-        "controller.t_n_min_s": 50e-6 / 6, "inverter.c_f": 2.2e-3,
-    })
+        "controller.strategy": "mpdtc63", "controller.t_n_min_s": 50e-6 / 6, "inverter.c_f": 2.2e-3,
+    }, base=TLEVEL)
     m = load_config(path)
     assert m.controller.strategy == "mpdtc63"
     assert m.controller.t_n_min_s == pytest.approx(50e-6 / 6)
@@ -156,8 +155,9 @@ def test_schema_covers_every_model_field() -> None:
                 "scenario": model_module.Scenario, "controller.derivation": model_module.Derivation,
                 "plant": model_module.Plant}
     for section, cls in sections.items():
-        leaves |= {f"{section}.{f.name}" for f in dataclasses.fields(cls) if f.name != "derivation"}
-    assert set(SCHEMA) == leaves
+        loaded = ("derivation", "trained_tables")  # a sub-section; the artefact read at load (not a field)
+        leaves |= {f"{section}.{f.name}" for f in dataclasses.fields(cls) if f.name not in loaded}
+    assert set(all_fields()) == leaves
 
 
 # --------------------------------------------------------------------------
@@ -276,28 +276,51 @@ INVALID = [
      "controller.derivation.coverage", "1.5", "(0, 1]"),
     ("max-active-7", SPMSM, {"controller.derivation.max_active": 7},
      "controller.derivation.max_active", "7", "[1, 6]"),
-    ("lambda-vo-negative", SPMSM, {"controller.lambda_vo_nm_per_v": -1.0},
+    ("lambda-vo-negative", TLEVEL, {"controller.lambda_vo_nm_per_v": -1.0},
      "controller.lambda_vo_nm_per_v", "-1.0", "[0, 1000]"),
     ("limit-negative", SPMSM, {"speed_loop.limit_nm": -1.0}, "speed_loop.limit_nm", "-1.0", "(0, 1e+06]"),
-    ("duration-zero", SPMSM, {"scenario.duration_s": 0.0}, "scenario.duration_s", "0.0", "(0, 100]"),
+    ("duration-zero", SPMSM, {"scenario.duration_s": 0.0}, "scenario.duration_s", "0.0",
+     "a run shorter than 10 control periods has no metrics: must be in [10*dt_s = 0.0005, 100]"),
+    ("duration-below-ten-periods", SPMSM, {"scenario.duration_s": 1e-5}, "scenario.duration_s", "1e-05",
+     "[10*dt_s = 0.0005, 100] (controller.dt_s = 5e-05)"),
     ("udc-min-above-udc", SPMSM, {"inverter.udc_min_v": 400.0},
      "inverter.udc_min_v", "400.0", "(0, inverter.udc_v = 312)"),
     ("udc-max-below-udc", SPMSM, {"inverter.udc_max_v": 300.0},
      "inverter.udc_max_v", "300.0", "(inverter.udc_v = 312, 20000]"),
-    ("capacitance-zero", SPMSM, {"inverter.c_f": 0.0}, "inverter.c_f", "0.0", "capacitance <= 0"),
-    ("capacitance-negative", SPMSM, {"inverter.c_f": -1e-3}, "inverter.c_f", "-0.001", "capacitance <= 0"),
+    ("capacitance-zero", TLEVEL, {"inverter.c_f": 0.0}, "inverter.c_f", "0.0", "capacitance <= 0"),
+    ("capacitance-negative", TLEVEL, {"inverter.c_f": -1e-3}, "inverter.c_f", "-0.001", "capacitance <= 0"),
     ("flux-geometry-ld-ne-lq", SPMSM, {"motor.lq_h": 9.5e-3}, "controller.predictor", "'flux-geometry'",
      'needs Ld == Lq (surface PMSM); use predictor = "dq-euler"'),
     ("flux-geometry-on-ipmsm", IPMSM, {"controller.predictor": "flux-geometry"},
      "controller.predictor", "'flux-geometry'", "motor.ld_h = 0.0033, motor.lq_h = 0.0073"),
     ("unknown-strategy", SPMSM, {"controller.strategy": "foo"}, "controller.strategy", "'foo'",
-     "must be one of conventional, s1, s2, s3, mpdtc27, mpdtc63"),
-    ("two-level-strategy-on-t-type", SPMSM, {"inverter.topology": "t-type"}, "controller.strategy",
-     "'conventional'", "needs inverter.topology = 'two-level' but inverter.topology = 't-type'"),
+     "must be one of conventional, s1, s2, s3"),
+    ("two-level-strategy-on-t-type", TLEVEL, {"controller.strategy": "conventional"}, "controller.strategy",
+     "'conventional'", "belongs to inverter.topology = 'two-level', but inverter.topology = 't-type'; "
+     "allowed for 't-type': mpdtc27, mpdtc63"),
     ("t-type-strategy-on-two-level", SPMSM, {"controller.strategy": "mpdtc27"}, "controller.strategy",
-     "'mpdtc27'", "needs inverter.topology = 't-type' but inverter.topology = 'two-level'"),
-    ("t-type-on-ipmsm", IPMSM, {"controller.strategy": "mpdtc63", "inverter.topology": "t-type"},
-     "controller.strategy", "'mpdtc63'", "needs Ld == Lq"),
+     "'mpdtc27'", "belongs to inverter.topology = 't-type', but inverter.topology = 'two-level'"),
+    ("two-level-fields-on-t-type", SPMSM, {"inverter.topology": "t-type"}, "controller.predictor",
+     "'flux-geometry'", "belongs to inverter.topology = 'two-level'; a 't-type' config has no such field"),
+    ("t-type-on-ipmsm", TLEVEL, {"motor.lq_h": 7.3e-3}, "controller.strategy", "'mpdtc63'", "needs Ld == Lq"),
+    ("c-f-on-two-level", SPMSM, {"inverter.c_f": 1e-3}, "inverter.c_f", "0.001",
+     "belongs to inverter.topology = 't-type'; a 'two-level' config has no such field: remove it"),
+    ("plant-c-f-on-two-level", SPMSM, {"plant.c_f": 1e-3}, "plant.c_f", "0.001",
+     "belongs to inverter.topology = 't-type'"),
+    ("lambda-on-two-level", SPMSM, {"controller.lambda_psi_nm_per_wb": 10.0}, "controller.lambda_psi_nm_per_wb",
+     "10.0", "belongs to inverter.topology = 't-type'"),
+    ("eps-t-on-t-type", TLEVEL, {"controller.eps_t_nm": 0.5}, "controller.eps_t_nm", "0.5",
+     "belongs to inverter.topology = 'two-level'; a 't-type' config has no such field"),
+    ("tables-on-t-type", TLEVEL, {"controller.tables": "published"}, "controller.tables", "'published'",
+     "belongs to inverter.topology = 'two-level'"),
+    ("derivation-on-t-type", TLEVEL, {"controller.derivation.coverage": 0.5}, "controller.derivation",
+     "{'coverage': 0.5}", "belongs to inverter.topology = 'two-level'"),
+    ("no-delay-compensation-on-t-type", TLEVEL, {"controller.delay_compensation": False},
+     "controller.delay_compensation", "False", "set plant.actuation_delay_periods); allowed: true"),
+    ("table5-set-on-two-level", SPMSM, {"scenario.set": "mpdtc-table5"}, "scenario.set", "'mpdtc-table5'",
+     "belongs to inverter.topology = 't-type', but inverter.topology = 'two-level'; allowed for 'two-level': config"),
+    ("eps-t-missing-on-two-level", SPMSM, {"controller.eps_t_nm": DELETE}, "controller.eps_t_nm", "<missing>",
+     "required field missing in [controller]"),
     ("unknown-topology", SPMSM, {"inverter.topology": "three-level"},
      "inverter.topology", "'three-level'", "two-level, t-type"),
     ("unknown-predictor", SPMSM, {"controller.predictor": "rk4"}, "controller.predictor", "'rk4'",
@@ -307,14 +330,14 @@ INVALID = [
      "mechanical, imposed"),
     ("unknown-target", SPMSM, {"target.name": "stm32f407"}, "target.name", "'stm32f407'",
      "host, stm32h743, tms320f28377"),
-    ("t-n-min-above-ts-3", SPMSM, {"controller.t_n_min_s": 2e-5}, "controller.t_n_min_s", "2e-05",
+    ("t-n-min-above-ts-3", TLEVEL, {"controller.t_n_min_s": 2e-5}, "controller.t_n_min_s", "2e-05",
      "clamp minimum above Ts/3: must be in [0, Ts/3 = 1.66667e-05] (controller.dt_s = 5e-05)"),
     ("unknown-number-format", SPMSM, {"controller.number_format": "fixed-q15"}, "controller.number_format",
      "'fixed-q15'", "must be one of float32, fixed"),
     ("psi-ref-on-t-type", TLEVEL, {"controller.psi_ref": "mtpa"}, "controller.psi_ref", "'mtpa'",
-     "two-level MPTC only"),
+     "belongs to inverter.topology = 'two-level'"),
     ("cost-on-t-type", TLEVEL, {"controller.cost": "reference"}, "controller.cost", "'reference'",
-     "leave controller.cost = 'rated'"),
+     "belongs to inverter.topology = 'two-level'"),
     ("fixed-q-too-small", SPMSM, {"controller.fixed_q": 4}, "controller.fixed_q", "4", "must be an integer in [8, 30]"),
     ("prefix-uppercase", SPMSM, {"meta.prefix": "Spmsm"}, "meta.prefix", "'Spmsm'", "^[a-z][a-z0-9_]{0,23}$"),
     ("prefix-digit-first", SPMSM, {"meta.prefix": "1spmsm"}, "meta.prefix", "'1spmsm'", "C identifier"),
@@ -374,12 +397,26 @@ def _directory(tmp_path: Path) -> Path:
     return path
 
 
+def _bom(tmp_path: Path) -> Path:
+    path = tmp_path / "bom.toml"
+    path.write_bytes(b"\xef\xbb\xbf" + SPMSM.read_bytes())
+    return path
+
+
+def _unicode_minus(tmp_path: Path) -> Path:
+    path = tmp_path / "minus.toml"
+    path.write_text('[meta]\nname = "x"\n[motor]\nb_nms = \u22121.0\n', encoding="utf-8")
+    return path
+
+
 @pytest.mark.parametrize(("make", "value", "allowed"), [
     (_not_toml, "'prefix = = \"x\"'", "not TOML: Invalid value (at line 3, column 10)"),
     (_binary, "<binary data>", "not UTF-8"),
     (_missing, "nonexistent.toml", "file not found"),
     (_directory, "adir.toml", "is a directory"),
-], ids=["not-toml", "binary", "missing-file", "directory"])
+    (_bom, "<byte-order mark>", "starts with a UTF-8 byte-order mark (BOM)"),
+    (_unicode_minus, "'b_nms = \u22121.0'", "line 4 column 9 is U+2212 MINUS SIGN, not the ASCII '-' it looks like"),
+], ids=["not-toml", "binary", "missing-file", "directory", "bom", "unicode-minus"])
 def test_invalid_file(tmp_path: Path, make, value: str, allowed: str) -> None:
     path = make(tmp_path)
     with pytest.raises(ConfigError) as exc:

@@ -15,7 +15,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
-__all__ = ["Ops", "NumberFormat", "number_format", "FORMATS", "QUANTISED", "FLOAT_CONTROLLER", "IDEAL"]
+__all__ = ["Ops", "NumberFormat", "number_format", "FORMATS", "CONFIG_FORMATS", "QUANTISED", "FLOAT_CONTROLLER", "IDEAL"]
 
 
 class Ops(Protocol):
@@ -170,6 +170,8 @@ from .float64 import FLOAT64  # noqa: E402
 #: Every number format, by ``controller.number_format`` value (layouts; ``scaled`` binds a step's scaling),
 #: and the analysis-only float64 ideal of ``mpcgen report`` (not a config choice).
 FORMATS: dict[str, NumberFormat] = {FLOAT32.name: FLOAT32, FIXED.name: FIXED, FLOAT64.name: FLOAT64}
+#: the ``controller.number_format`` values a config may choose (float64 is analysis only)
+CONFIG_FORMATS: tuple[str, ...] = (FLOAT32.name, FIXED.name)
 
 #: the formats the quantisation report compares, by role: the quantised controller, the float
 #: controller it is measured against, and the float64 ideal

@@ -138,7 +138,7 @@ class Fixed:
     angle_guard_rad: float = 8.0
     #: sin/cos: the quadrant (table of 4: y = theta 2/pi stays small) and a degree-7/8 polynomial
     sincos_form: SinCosForm = SinCosForm(4, 3, 4)
-    _ops: list = field(default_factory=list, compare=False, repr=False)
+    _ops: list[Any] = field(default_factory=list, compare=False, repr=False)
 
     def for_step(self, signals: list[Signal], base: BaseRanges, global_q: int | None) -> Fixed:
         return Fixed(choose_scaling(signals, base, global_q))

@@ -1,6 +1,6 @@
 """An analysis-only float64 number format: the ideal the fixed-point report measures against.
 
-Not a config choice (``codegen.model.NUMBER_FORMATS`` does not list it) and
+Not a config choice (``codegen.numfmt.CONFIG_FORMATS`` does not list it) and
 without a C spelling: the topology's Python reference runs in it, one float64
 rounding per operation, to give ``mpcgen report`` its float64 ideal.  Its
 angle guard is the fixed-point format's, so the ideal trips its guard where

@@ -31,6 +31,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -164,7 +165,7 @@ def _best_bases(sigs: list[Signal], base: BaseRanges) -> tuple[tuple[int, int, i
     logs = np.array([math.log2(s.max_abs) if s.max_abs > 0 else -np.inf for s in sigs])
     exact = np.array([s.exact and s.max_abs > 0 for s in sigs])
     nat = np.array(_natural_bases(base))
-    best: tuple | None = None
+    best: tuple[Any, ...] | None = None
     rng = range(-_SEARCH, _SEARCH + 1)
     for dv in rng:
         for da in rng:

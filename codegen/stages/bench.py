@@ -25,17 +25,19 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from codegen import __version__
 from codegen.errors import MpcgenError
-from codegen.model import NUMBER_FORMATS, Model
+from codegen.model import Model
+from codegen.numfmt import CONFIG_FORMATS
 from codegen.stages.cycles import METHOD_NOTE
 from codegen.topology import topology_of
 
 
-def host_ns_per_step(libs: dict, states: np.ndarray, repeats: int) -> dict[str, float]:
+def host_ns_per_step(libs: dict[str, Any], states: np.ndarray, repeats: int) -> dict[str, float]:
     """Best-of-``repeats`` ns per step, strategies interleaved in each round."""
     best = {s: float("inf") for s in libs}
     for _ in range(max(1, repeats)):
@@ -48,9 +50,9 @@ def host_ns_per_step(libs: dict, states: np.ndarray, repeats: int) -> dict[str, 
 
 
 def emulated_instructions(model: Model, strategies: list[str], log: Callable[[str], None],
-                          cycle_states: int = 256) -> dict[str, dict]:
+                          cycle_states: int = 256) -> dict[str, dict[str, Any]]:
     """Instructions per step on the emulated Cortex-M7 (QEMU -icount) for each strategy, in every
-    number format a config can choose (``codegen.model.NUMBER_FORMATS``): strategy -> format name -> figures, or None
+    number format a config can choose (``codegen.numfmt.CONFIG_FORMATS``): strategy -> format name -> figures, or None
     where the config does not fit another format (its error message under ``"error"``).
 
     Each image, in every number format, replays the same ``N_BENCH`` states of the float32
@@ -66,9 +68,9 @@ def emulated_instructions(model: Model, strategies: list[str], log: Callable[[st
     from codegen.stages.emulate import EmulationError, run_and_check
 
     own = model.controller.number_format
-    out: dict[str, dict] = {s: {} for s in strategies}
+    out: dict[str, dict[str, Any]] = {s: {} for s in strategies}
     with tempfile.TemporaryDirectory(prefix="mpcgen-m7-") as tmp:
-        for fmt in (own, *(f for f in NUMBER_FORMATS if f != own)):
+        for fmt in (own, *(f for f in CONFIG_FORMATS if f != own)):
             for s in strategies:
                 variant = model.with_controller(strategy=s, number_format=fmt)
                 log(f"emulated Cortex-M7: building and running {s} ({fmt}) in QEMU")
@@ -93,7 +95,7 @@ def emulated_instructions(model: Model, strategies: list[str], log: Callable[[st
     return out
 
 
-def _format_columns(per_format: dict[str, dict]) -> tuple[dict[str, object], str]:
+def _format_columns(per_format: dict[str, dict[str, Any]]) -> tuple[dict[str, object], str]:
     """JSON entries ``m7_instructions_per_step_<format>`` (median, None if not measured) and the
     table's cells, one per number format."""
     entry: dict[str, object] = {}
@@ -106,7 +108,7 @@ def _format_columns(per_format: dict[str, dict]) -> tuple[dict[str, object], str
 
 
 def bench(model: Model, strategies: list[str], emulated: bool = False, repeats: int = 5,
-          log: Callable[[str], None] = print) -> dict:
+          log: Callable[[str], None] = print) -> dict[str, Any]:
     """Run the benchmark; returns the JSON-able result with a printable ``_table``."""
     topo = topology_of(model)
     traj = topo.trajectory(model, progress=lambda f: log(f"  recording trajectory {f:5.0%}"))
@@ -118,7 +120,7 @@ def bench(model: Model, strategies: list[str], emulated: bool = False, repeats: 
     log(f"timing {len(strategies)} strategies over {len(states)} recorded states, best of {repeats}")
     ns = host_ns_per_step(libs, states, repeats)
     base = strategies[0]
-    result: dict = {
+    result: dict[str, Any] = {
         "config": model.name, "config_hash": model.config_hash(), "version": __version__,
         "trajectory_states": int(len(states)),
         "sim_periods_per_s": n_periods / sim_wall if sim_wall > 0 else 0.0,

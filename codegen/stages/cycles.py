@@ -409,7 +409,7 @@ def check_bound(symbol: str, est_cycles: np.ndarray, bound: np.ndarray) -> None:
                          f"{len(bound)} states: the essential operations are miscounted")
 
 
-def strategy_cycles(model: Model, tables: Any, elf_path: Path, *, n_bench: int = N_BENCH, max_states: int = 256) -> dict:
+def strategy_cycles(model: Model, tables: Any, elf_path: Path, *, n_bench: int = N_BENCH, max_states: int = 256) -> dict[str, Any]:
     """Estimate and bound of one strategy's image (``model`` the strategy's variant): the bench
     states the image embeds (the topology's trajectory, ``n_bench`` evenly spaced, in the step's
     format), at most ``max_states`` of them traced.  JSON-ready figures."""

@@ -59,7 +59,7 @@ class QemuRun:
 
 
 
-def kill_group(proc: subprocess.Popen) -> None:
+def kill_group(proc: subprocess.Popen[Any]) -> None:
     """Kill QEMU's process group (it was started in its own session) and reap it."""
     if proc.poll() is None:
         try:

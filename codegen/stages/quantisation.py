@@ -134,7 +134,7 @@ def _errors(topo: Any, output: Record, t_fx: Any, t32: Any, t_64: Any, x_fx: np.
     return res
 
 
-def _runs(strategy_result: dict) -> dict[str, dict]:
+def _runs(strategy_result: dict[str, Any]) -> dict[str, dict[str, Any]]:
     """The runs of one strategy's simulate result: {run: metrics} (a single-run result is "scenario")."""
     if "T_rip_RMSE_nm" in strategy_result:
         return {"scenario": strategy_result}

@@ -40,7 +40,7 @@ def _pct(x: float) -> str:
     return "n/a" if x != x else f"{100 * x:.3f} %"
 
 
-def _formats(d: dict) -> list[str]:
+def _formats(d: dict[str, Any]) -> list[str]:
     sc = d["scaling"]
     ev, ea, es = sc["exps_v_a_s"]
     lines = ["", f"Scaling: {sc['mode']}, G = {sc['frac_bits']} fractional bits of the per-unit values, "
@@ -61,7 +61,7 @@ def _formats(d: dict) -> list[str]:
     return lines
 
 
-def _errors(d: dict) -> list[str]:
+def _errors(d: dict[str, Any]) -> list[str]:
     lines = ["", "| states | output | unit | fixed max | fixed RMS | float32 max | float32 RMS | ideal max \\|x\\| |",
              "|---|---|---|---|---|---|---|---|"]
     for key, e in d["errors"].items():
@@ -73,7 +73,7 @@ def _errors(d: dict) -> list[str]:
     return lines
 
 
-def _agreement(d: dict) -> list[str]:
+def _agreement(d: dict[str, Any]) -> list[str]:
     lines = ["", "| states | count | both guards pass | one guard trips | vector agrees | sw agrees |",
              "|---|---|---|---|---|---|"]
     for key, a in d["agreement"].items():
@@ -83,7 +83,7 @@ def _agreement(d: dict) -> list[str]:
     return lines
 
 
-def _closed_loop(d: dict) -> list[str]:
+def _closed_loop(d: dict[str, Any]) -> list[str]:
     lines = ["", "| run | metric | fixed | float32 | fixed / float32 |", "|---|---|---|---|---|"]
     for run, row in d["closed_loop"].items():
         for k in RIPPLE_KEYS:
@@ -93,7 +93,7 @@ def _closed_loop(d: dict) -> list[str]:
     return lines
 
 
-def markdown(model: Model, data: dict, plot_files: dict[str, list[str]] | None = None) -> str:
+def markdown(model: Model, data: dict[str, Any], plot_files: dict[str, list[str]] | None = None) -> str:
     """The report of ``data`` (``analyse`` of ``model``); ``plot_files``: per strategy, the PNG file names."""
     lines = [f"# {model.prefix}: quantisation report (fixed point)", "",
              f"- config: `{model.name}` (hash {data['config_hash']}), topology {data['topology']}, mpcgen {__version__}",
@@ -121,7 +121,7 @@ def markdown(model: Model, data: dict, plot_files: dict[str, list[str]] | None =
     return "\n".join(lines) + "\n"
 
 
-def plots(model: Model, data: dict, traces: Path | None, outdir: Path) -> dict[str, list[str]]:
+def plots(model: Model, data: dict[str, Any], traces: Path | None, outdir: Path) -> dict[str, list[str]]:
     """Per strategy: the torque of every closed-loop run, fixed vs float32 (from ``traces``:
     ``fixed.npz``, ``float32.npz``), and the histograms of the fixed outputs' errors; file names."""
     from codegen.plotting import new_figure, save_figure

@@ -38,8 +38,8 @@ from pathlib import Path
 
 import numpy as np
 
-from codegen.config import INT, REAL, SCHEMA, load_config, parse_override
-from codegen.errors import ConfigError, UsageError
+from codegen.config import INT, REAL, all_fields, load_config, owners, parse_override
+from codegen.errors import ConfigError, Marker, UsageError
 from codegen.model import PLANT_DEFAULTS, Model
 
 __all__ = ["Axis", "Spread", "Plan", "parse_param", "parse_spread", "build_plan", "command",
@@ -100,9 +100,9 @@ class Plan:
 # ---------------------------------------------------------------- parsing
 def _known_field(option: str, name: str, text: str) -> str:
     """``name`` if it is a config field, else one line naming the option and close matches."""
-    if name in SCHEMA:
+    if name in all_fields():
         return name
-    guess = difflib.get_close_matches(name, list(SCHEMA), n=1)
+    guess = difflib.get_close_matches(name, list(all_fields()), n=1)
     maybe = f" (did you mean '{guess[0]}'?)" if guess else ""
     raise UsageError(f"{option} {text!r}: '{name}' is not a config field{maybe}; "
                      f"fields are section.field as in the config file, e.g. controller.eps_t_nm")
@@ -135,11 +135,11 @@ def _range(option: str, text: str, name: str, value: str) -> list[object]:
     if n > MAX_AXIS_VALUES:
         raise UsageError(f"{option} {text!r}: {n} values, at most {MAX_AXIS_VALUES} per axis")
     vals: list[object] = [_number_text(a + i * c) for i in range(n)]
-    if SCHEMA[name].kind == INT:
+    if all_fields()[name].kind == INT:
         if not all(float(v).is_integer() for v in vals):  # type: ignore[arg-type]
             raise UsageError(f"{option} {text!r}: {name} is an integer field; give integer START, STEP")
         vals = [int(v) for v in vals]  # type: ignore[call-overload]
-    elif SCHEMA[name].kind != REAL:
+    elif all_fields()[name].kind != REAL:
         raise UsageError(f"{option} {text!r}: {name} is not a number; give a comma list of its values")
     return vals
 
@@ -184,7 +184,7 @@ def parse_spread(text: str, option: str = "--spread") -> Spread:
         pct = math.nan
     if not (0.0 < pct < 100.0):
         raise UsageError(f"{option} {text!r}: expected {form}")
-    if SCHEMA[name].kind != REAL:
+    if all_fields()[name].kind != REAL:
         raise UsageError(f"{option} {text!r}: {name} is not a real-valued field; only those can be spread")
     return Spread(name, pct)
 
@@ -242,6 +242,13 @@ def build_plan(config: str, model: Model, base: dict[str, object], strategies: l
                          "--monte-carlo N with --spread SECTION.FIELD=+-PCT")
     if monte_carlo and not sp:
         raise UsageError(f"--monte-carlo {monte_carlo} needs at least one --spread SECTION.FIELD=+-PCT")
+    for option, name in [("--param", a.field) for a in axes] + [("--spread", s.field) for s in sp]:
+        theirs = owners(name)
+        if model.inverter.topology not in theirs:
+            raise ConfigError(config, name, Marker(f"{option} {name}"),
+                              f"belongs to inverter.topology = {' or '.join(repr(t) for t in theirs)}; a "
+                              f"'{model.inverter.topology}' config has no such field, so sweeping it would change "
+                              "nothing")
     seen: set[str] = set()
     for name in [a.field for a in axes] + [s.field for s in sp]:
         if name in seen:

@@ -36,24 +36,35 @@ def _simulate(tmp_path: Path, *argv: str) -> dict:
     return json.loads(out.read_text())
 
 
-@pytest.mark.parametrize("comp", ["--delay-compensation", "--no-delay-compensation"])
 @pytest.mark.parametrize("d", [0, 1, 2])
-@pytest.mark.parametrize("config,strategy,short", [(SPMSM, "conventional", SHORT_2L), (TLEVEL, "mpdtc63", SHORT_3L)],
-                         ids=["two-level", "t-type"])
-def test_every_delay_and_compensation_runs(tmp_path, config, strategy, short, d, comp):
-    data = _simulate(tmp_path, str(config), "--strategies", strategy, comp,
-                     "--set", f"plant.actuation_delay_periods={d}", *short)
-    assert list(data["strategies"]) == [strategy]
-    _assert_metrics(data["strategies"][strategy])
+@pytest.mark.parametrize("config,strategy,short,comps", [
+    (SPMSM, "conventional", SHORT_2L, ["--delay-compensation", "--no-delay-compensation"]),
+    (TLEVEL, "mpdtc63", SHORT_3L, ["--delay-compensation"]),
+], ids=["two-level", "t-type"])
+def test_every_delay_and_compensation_runs(tmp_path, config, strategy, short, comps, d):
+    for comp in comps:
+        data = _simulate(tmp_path, str(config), "--strategies", strategy, comp,
+                         "--set", f"plant.actuation_delay_periods={d}", *short)
+        assert list(data["strategies"]) == [strategy]
+        _assert_metrics(data["strategies"][strategy])
 
 
-@pytest.mark.parametrize("config", [SPMSM, TLEVEL], ids=["seed001_spmsm", "seed000_tlevel"])
-def test_the_issue_command_runs(tmp_path, config):
+def test_the_issue_command_runs(tmp_path):
     """``simulate CONFIG --set plant.actuation_delay_periods=1 --no-delay-compensation``."""
-    data = _simulate(tmp_path, str(config), "--set", "plant.actuation_delay_periods=1", "--no-delay-compensation")
+    data = _simulate(tmp_path, str(SPMSM), "--set", "plant.actuation_delay_periods=1", "--no-delay-compensation")
     assert data["strategies"]
     for result in data["strategies"].values():
         _assert_metrics(result)
+
+
+def test_no_delay_compensation_is_refused_where_the_step_always_compensates(tmp_path, capsys):
+    """The T-type MPDTC step always compensates the one-period delay: ``--no-delay-compensation`` would
+    change only the simulated plant, so it is refused in one line (exit 2), before any run."""
+    out = tmp_path / "sim.json"
+    assert main(["simulate", str(TLEVEL), "--no-delay-compensation", "--json", str(out), "-q"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "controller.delay_compensation = False" in err and "allowed: true" in err, err
+    assert not out.exists()
 
 
 def _values(d: object, key: str) -> list[object]:

@@ -12,7 +12,8 @@ import pytest
 
 from codegen.cli import main
 from codegen.config import load_config
-from codegen.topology import TOPOLOGIES, topology
+from codegen.registry import TOPOLOGY_PACKAGES as TOPOLOGIES
+from codegen.topology import topology
 
 from conftest import EXAMPLES
 

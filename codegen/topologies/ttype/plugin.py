@@ -13,15 +13,15 @@ import numpy as np
 
 from codegen.errors import Unsupported
 from codegen.hostbuild import HostLib
-from codegen.model import STRATEGIES_BY_TOPOLOGY, Model
+from codegen.model import Model
 from codegen.records import Record
 from codegen.teststates import in_format
-from codegen.topologies.ttype import fwstates, paper, scenarios, sim
+from codegen.topologies.ttype import fwstates, paper, scenarios, section, sim
 from codegen.topologies.ttype import reference as ref
 from codegen.topologies.ttype import report as report_md
 from codegen.topologies.ttype import states as test_states
 from codegen.topologies.ttype import tables_text as text
-from codegen.topologies.ttype.derive import derive_three_level, max_groups_of
+from codegen.topologies.ttype.derive import ThreeLevelTables, derive_three_level, max_groups_of
 from codegen.topologies.ttype.hostbuild import build_three_level_library
 from codegen.topologies.ttype.records import INPUT
 from codegen.topologies.ttype.records import output_record as _output_record
@@ -30,7 +30,7 @@ from codegen.topology import Log, Progress, Trajectory, record_trajectory
 
 name = "t-type"
 title = "T-type three-level MPDTC"
-strategies = STRATEGIES_BY_TOPOLOGY["t-type"]
+strategies = section.strategies
 input_record = INPUT
 reference = "codegen.topologies.ttype.reference.step_batch"
 trajectory_doc = "states evenly spaced over the 27-MPDTC run at rated speed and torque"
@@ -48,12 +48,20 @@ def output_record(model: Model) -> Record:
     return _output_record(max_groups_of(model.controller.strategy))
 
 
-def derive(model: Model, progress: Progress | None = None) -> Any:
-    """The candidate tables (derived by search; no training run, so no progress to report)."""
-    return derive_three_level(model)
+derive = derive_three_level
 
 
-def host_library(model: Model, tables: Any, with_sim: bool = False) -> HostLib:
+def needs_training(model: Model) -> bool:
+    """No T-type table is trained: every table is derived by search."""
+    return False
+
+
+def train(model: Model, log: Log) -> Model:
+    """The model itself (nothing to train)."""
+    return model
+
+
+def host_library(model: Model, tables: ThreeLevelTables, with_sim: bool = False) -> HostLib:
     return build_three_level_library(model, tables, with_sim=with_sim)
 
 
@@ -65,11 +73,11 @@ def closed_loop_states(model: Model, lib: HostLib) -> np.ndarray:
     return np.concatenate(runs)
 
 
-def adversarial_states(model: Model, tables: Any, n: int) -> np.ndarray:
+def adversarial_states(model: Model, tables: ThreeLevelTables, n: int) -> np.ndarray:
     return test_states.adversarial_states(model, tables, n_target=n)
 
 
-def random_states(model: Model, tables: Any, n: int, seed: int) -> np.ndarray:
+def random_states(model: Model, tables: ThreeLevelTables, n: int, seed: int) -> np.ndarray:
     return in_format(test_states.random_states(model, n, seed=seed), input_record.bind(tables.nf))
 
 
@@ -80,7 +88,7 @@ def trajectory(model: Model, progress: Progress | None = None) -> Trajectory:
     return record_trajectory(base, lib, sim.run_closed_loop, sim.controller_inputs, progress)
 
 
-def simulate(model: Model, chosen: list[str], plots: Path | None, log: Log, traces: Path | None = None) -> dict:
+def simulate(model: Model, chosen: list[str], plots: Path | None, log: Log, traces: Path | None = None) -> dict[str, Any]:
     return scenarios.run_three_level(model, chosen, plots=plots, log=log, traces=traces)
 
 
@@ -90,7 +98,7 @@ def sweep_eps(model: Model, eps_list: list[float], log: Log) -> NoReturn:
                       "whose MPDTC has no torque threshold")
 
 
-def paper_table(model: Model, data: dict) -> dict:
+def paper_table(model: Model, data: dict[str, Any]) -> dict[str, Any]:
     return paper.paper_table(model, data)
 
 
@@ -111,14 +119,23 @@ def export_tables(model: Model, path: Path, log: Log) -> NoReturn:
                       f"no training run; {model.source} has nothing to export (see `mpcgen tables` for them)")
 
 
+# -- simulation facet: the closed loop, period by period, its trace and metrics, the on-board plant --
+decision_field = sim.DECISION_FIELD
+closed_loop_trace = sim.SIMULATOR.closed_loop_trace
+period_stepper = sim.SIMULATOR.period_stepper
+trace_from = sim.trace_from
+trace_metrics = sim.trace_metrics
+firmware_plant = sim.SIMULATOR.firmware_plant
+
+
 if TYPE_CHECKING:  # mypy checks this module against the protocol it implements
     from codegen.topologies.ttype import plugin as _this
     from codegen.topology import Topology
 
-    _implements: Topology = _this
+    _implements: Topology[ThreeLevelTables] = _this
 
 
-def essential_ops(model: Model, tables: Any) -> dict[str, dict[str, int]]:
+def essential_ops(model: Model, tables: ThreeLevelTables) -> dict[str, dict[str, int]]:
     """Essential operations per step, per candidate, per member, per virtual member and per
     unclamped T_N (``opcount``): the cycle bound."""
     from codegen.topologies.ttype import opcount
@@ -126,7 +143,7 @@ def essential_ops(model: Model, tables: Any) -> dict[str, dict[str, int]]:
     return opcount.essential_ops(tables)
 
 
-def op_multiplicities(model: Model, tables: Any, states: np.ndarray, expected: np.ndarray) -> dict[str, np.ndarray]:
+def op_multiplicities(model: Model, tables: ThreeLevelTables, states: np.ndarray, expected: np.ndarray) -> dict[str, np.ndarray]:
     """Per state, how often each unit of ``essential_ops`` runs: the output's ``n_eval`` and
     ``n_members``, and the reference's count of virtual members and of unclamped T_N."""
     deadbeat = ref.deadbeat_counts(tables, states)

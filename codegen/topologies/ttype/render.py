@@ -5,6 +5,8 @@ only in placement attributes and comments, the arithmetic is identical.
 """
 from __future__ import annotations
 
+from typing import Any
+
 from codegen.model import Model
 from codegen.render import TableRow, render_step, render_step_cdef, sincos_bound, step_context, table_fields
 from codegen.topologies.ttype import virtual as vv
@@ -21,7 +23,7 @@ from codegen.topologies.ttype.records import (
 )
 
 
-def _distinct_patterns(case: dict) -> dict:
+def _distinct_patterns(case: dict[str, Any]) -> dict[str, Any]:
     """27-MPDTC's case of a group (every member basic, |V_o(k+2)| a function of its one pattern):
     a member whose pattern an earlier member has is never strictly smaller, so it is left out of
     the comparisons (NNN and PPP share pattern 000)."""
@@ -34,7 +36,7 @@ def _distinct_patterns(case: dict) -> dict:
     return {**case, "members": members}
 
 
-def _programs_context(t: ThreeLevelTables, cases: dict[int, dict]) -> dict:
+def _programs_context(t: ThreeLevelTables, cases: dict[int, dict[str, Any]]) -> dict[str, Any]:
     """63-MPDTC: the resolve programs (programs.py), one generated case each, and their tables."""
     progs = resolve_programs(t)
     return {
@@ -45,7 +47,7 @@ def _programs_context(t: ThreeLevelTables, cases: dict[int, dict]) -> dict:
         "pat_rot": [TableRow(r, f"pi^{m}") for m, r in enumerate(progs.pat_rot)]}
 
 
-def three_level_context(model: Model, t: ThreeLevelTables, target: str) -> dict:
+def three_level_context(model: Model, t: ThreeLevelTables, target: str) -> dict[str, Any]:
     """Template context: values to print, already derived."""
     mg = t.max_groups
     seq = []

@@ -23,6 +23,7 @@ import dataclasses
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -64,7 +65,7 @@ def steady_window(model: Model) -> tuple[float, float]:
     return (round(d - model.scenario.window_s, 12), d)
 
 
-def prefix(trace, duration_s: float):
+def prefix(trace: Any, duration_s: float) -> Any:
     """The first ``duration_s`` of a trace (every per-period array cut; the run is causal, so this is
     the trace a run of that duration gives: round(duration_s / dt_s) periods, as
     ``codegen.simulator.driver.n_periods`` counts them)."""
@@ -83,7 +84,8 @@ def load_step_model(model: Model) -> Model:
     return model.replace(scenario=sc)
 
 
-def _run(model: Model, log: Callable[[str], None], label: str, initial_speed_rpm: float = 0.0):
+def _run(model: Model, log: Callable[[str], None], label: str,
+         initial_speed_rpm: float = 0.0) -> tuple[Any, float]:
     from codegen.topologies.ttype.derive import derive_three_level
     from codegen.topologies.ttype.hostbuild import build_three_level_library
     from codegen.topologies.ttype.sim import run_closed_loop
@@ -95,7 +97,7 @@ def _run(model: Model, log: Callable[[str], None], label: str, initial_speed_rpm
     return trace, time.perf_counter() - t0
 
 
-def _row(label: str, s: str, m: dict) -> str:
+def _row(label: str, s: str, m: dict[str, Any]) -> str:
     """One table row: the metrics (``*`` not steady, ``n/a`` not computed), faults, THD window."""
     return (f"{label:>6s} {s:9s} {flagged(m, 'T_rip_RMSE_nm', '9.4f')}{flagged(m, 'psi_rip_RMSE_wb', '10.5f')}"
             f"{flagged(m, 'THD_ia_percent', '8.2f')}{flagged(m, 'Vo_std_v', '8.4f')}"
@@ -107,11 +109,11 @@ HEAD = (f"{'run':>6s} {'strategy':9s} {'T_rip/N*m':>9s}  {'psi_rip/Wb':>10s}  {'
         f"{'THD_uab/%':>9s}  {'jump':>4s} {'Cal':>5s}  {'f_ave/kHz':>9s}  {'faults':>6s} {WINDOW_HEAD}")
 
 
-def table5(results: dict, strategies: list[str]) -> str:
+def table5(results: dict[str, Any], strategies: list[str]) -> str:
     """Seed-000 Table 5 layout (+ V_o, u_ab THD, max jump, faults, THD window) and the 63-vs-27
     reduction; the rated-speed load step last."""
     rows = [HEAD]
-    notes: dict[str, dict] = {}
+    notes: dict[str, dict[str, Any]] = {}
     for key, label in [*((f"{v:g}rpm_steady", f"{v:.0f}") for v in STEADY_SPEEDS_RPM), ("load_step", "load")]:
         for s in strategies:
             m = results[s][key]
@@ -126,7 +128,7 @@ def table5(results: dict, strategies: list[str]) -> str:
     return "\n".join(rows + footnotes(notes, KEYS))
 
 
-def config_table(results: dict, strategies: list[str]) -> str:
+def config_table(results: dict[str, Any], strategies: list[str]) -> str:
     """The config's scenario: one row per strategy (metrics, faults, THD window), footnotes."""
     rows = [HEAD] + [_row("config", s, results[s]["scenario"]) for s in strategies]
     return "\n".join(rows + footnotes({s: results[s]["scenario"] for s in strategies}, KEYS))
@@ -143,7 +145,7 @@ def runs_of(variant: Model) -> list[tuple[str, Model, float]]:
     return runs
 
 
-def _metrics(key: str, trace, m: Model, config: Model) -> dict[str, dict]:
+def _metrics(key: str, trace: Any, m: Model, config: Model) -> dict[str, dict[str, Any]]:
     """Result entries of one run: ``key`` alone, or for a steady Table-5 run ``key`` (the first
     ``scenario.duration_s`` from start-up) and ``key_steady`` (the last ``window_s``)."""
     if config.scenario.set != "mpdtc-table5" or key == "load_step":
@@ -158,7 +160,7 @@ def _metrics(key: str, trace, m: Model, config: Model) -> dict[str, dict]:
 
 
 def run_three_level(model: Model, strategies: list[str], plots: Path | None = None,
-                    log: Callable[[str], None] = print, traces: Path | None = None) -> dict:
+                    log: Callable[[str], None] = print, traces: Path | None = None) -> dict[str, Any]:
     """Every strategy over the runs of :func:`runs_of`; JSON-ready dict with ``_table`` and ``_warnings``.
 
     Every run's trace memory is checked before anything runs
@@ -169,12 +171,12 @@ def run_three_level(model: Model, strategies: list[str], plots: Path | None = No
 
     for _key, m, _speed in runs_of(model):
         check_trace_memory(m, TRACE)
-    results: dict[str, dict] = {}
+    results: dict[str, dict[str, Any]] = {}
     warnings: list[str] = []
     with trace_writer(traces, TRACE) as writer:
         for s in strategies:
             results[s] = {}
-            whole: list[tuple[int, dict]] = []  # (periods, faults) of each whole run
+            whole: list[tuple[int, dict[str, Any]]] = []  # (periods, faults) of each whole run
             for key, m, speed in runs_of(model.with_controller(strategy=s)):
                 log(f"simulate {model.name} / {s} / {key}: {m.scenario.duration_s:g} s")
                 trace, wall = _run(m, log, f"{s} {key}", initial_speed_rpm=speed)
@@ -220,7 +222,7 @@ def _plot_speed(m: Model) -> float:
     return float(max(m.scenario.speed_ref_rpm, key=lambda step: step[0])[1])
 
 
-def _fault_warning(strategy: str, runs: list[tuple[int, dict]]) -> str | None:
+def _fault_warning(strategy: str, runs: list[tuple[int, dict[str, Any]]]) -> str | None:
     """One stderr line for a strategy whose guard tripped in any of its whole runs (counts summed)."""
     counts: dict[str, int] = {}
     for _n, f in runs:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from functools import partial
+from typing import Any
 
 import numpy as np
 
@@ -25,7 +26,7 @@ from codegen.topologies.twolevel.states import limits, place_flux_on_border, thr
 FLOATS = ("ia_a", "ib_a", "theta_e_rad", "omega_e_rad_s", "udc_v", "torque_ref_nm")
 
 
-def _records(ia, ib, th, om, udc, tref, sw) -> np.ndarray:
+def _records(ia: Any, ib: Any, th: Any, om: Any, udc: Any, tref: Any, sw: Any) -> np.ndarray:
     """Input records from per-field columns (float32 fields rounded once)."""
     x = np.zeros(len(ia), INPUT_DTYPE)
     for name, col in zip(FLOATS, (ia, ib, th, om, udc, tref)):

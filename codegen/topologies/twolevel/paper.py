@@ -87,7 +87,7 @@ def _ratio_lines(rows: list[dict[str, Any]], title: str) -> list[str]:
     return out
 
 
-def _table9(model: Model, results: dict[str, dict]) -> dict[str, Any]:
+def _table9(model: Model, results: dict[str, dict[str, Any]]) -> dict[str, Any]:
     published = {r.strategy: r for r in pub.TABLE9_IPMSM}
     zero = dict(pub.TABLE9_ZERO_VECTOR_PERCENT)
     rows: list[dict[str, Any]] = []
@@ -164,7 +164,7 @@ def _table2_at(eps: float) -> pub.Table2Row | None:
     return next((r for r in pub.TABLE2_THRESHOLD_SWEEP if _same(r.band_nm, eps)), None)
 
 
-def _spmsm(model: Model, results: dict[str, dict]) -> dict[str, Any]:
+def _spmsm(model: Model, results: dict[str, dict[str, Any]]) -> dict[str, Any]:
     eps = float(model.controller.eps_t_nm)
     t2 = _table2_at(eps)
     rows = [_t2_row("conventional", pub.TABLE2_CONVENTIONAL, results.get("conventional", {})),

@@ -10,20 +10,22 @@ metrics (``scenarios``, ``metrics``, ``plots``), table printing
 """
 from __future__ import annotations
 
+import tempfile
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from codegen.hostbuild import HostLib
-from codegen.model import STRATEGIES_BY_TOPOLOGY, Model
+from codegen.model import Model
 from codegen.records import Record
 from codegen.teststates import in_format
-from codegen.topologies.twolevel import fwstates, paper, scenarios, sim, switch_tables
+from codegen.topologies.twolevel import fwstates, paper, scenarios, section, sim, switch_tables, tables_file
 from codegen.topologies.twolevel import reference as ref
 from codegen.topologies.twolevel import report as report_md
 from codegen.topologies.twolevel import states as test_states
 from codegen.topologies.twolevel import tables_text as text
+from codegen.topologies.twolevel.derive import TwoLevelTables
 from codegen.topologies.twolevel.hostbuild import build_host_library
 from codegen.topologies.twolevel.records import INPUT, OUTPUT
 from codegen.topologies.twolevel.render import render_two_level
@@ -31,12 +33,13 @@ from codegen.topology import Log, Progress, Trajectory, record_trajectory
 
 name = "two-level"
 title = "two-level MPTC"
-strategies = STRATEGIES_BY_TOPOLOGY["two-level"]
+strategies = section.strategies
 input_record = INPUT
 reference = "codegen.topologies.twolevel.reference.step_batch"
 trajectory_doc = "states evenly spaced over the conventional controller's closed-loop run of the scenario"
 
 derive = switch_tables.tables_for
+needs_training = switch_tables.needs_training
 render = render_two_level
 report = report_md.report_text
 step_batch = ref.step_batch
@@ -48,7 +51,7 @@ def output_record(model: Model) -> Record:
     return OUTPUT
 
 
-def host_library(model: Model, tables: Any, with_sim: bool = False) -> HostLib:
+def host_library(model: Model, tables: TwoLevelTables, with_sim: bool = False) -> HostLib:
     return build_host_library(model, tables, with_sim=with_sim)
 
 
@@ -56,11 +59,11 @@ def closed_loop_states(model: Model, lib: HostLib) -> np.ndarray:
     return sim.controller_inputs(sim.run_closed_loop(lib.ffi, lib.lib, model), model, lib.records.input.nf)
 
 
-def adversarial_states(model: Model, tables: Any, n: int) -> np.ndarray:
+def adversarial_states(model: Model, tables: TwoLevelTables, n: int) -> np.ndarray:
     return test_states.adversarial_states(model, tables, ref.step_batch, n_target=n)
 
 
-def random_states(model: Model, tables: Any, n: int, seed: int) -> np.ndarray:
+def random_states(model: Model, tables: TwoLevelTables, n: int, seed: int) -> np.ndarray:
     return in_format(test_states.random_states(model, n, seed=seed), input_record.bind(tables.nf))
 
 
@@ -71,15 +74,15 @@ def trajectory(model: Model, progress: Progress | None = None) -> Trajectory:
     return record_trajectory(base, lib, sim.run_closed_loop, sim.controller_inputs, progress)
 
 
-def simulate(model: Model, chosen: list[str], plots: Path | None, log: Log, traces: Path | None = None) -> dict:
+def simulate(model: Model, chosen: list[str], plots: Path | None, log: Log, traces: Path | None = None) -> dict[str, Any]:
     return scenarios.run_scenarios(model, chosen, plots=plots, log=log, traces=traces)
 
 
-def sweep_eps(model: Model, eps_list: list[float], log: Log) -> dict:
+def sweep_eps(model: Model, eps_list: list[float], log: Log) -> dict[str, Any]:
     return scenarios.run_threshold_sweep(model, eps_list, log=log)
 
 
-def paper_table(model: Model, data: dict) -> dict:
+def paper_table(model: Model, data: dict[str, Any]) -> dict[str, Any]:
     return paper.paper_table(model, data)
 
 
@@ -89,6 +92,20 @@ def tables_text(model: Model, source: str | None, log: Log) -> str:
 
 def tables_rows(model: Model, source: str | None, log: Log) -> list[dict[str, object]]:
     return text.two_level_tables_rows(model, source or "training", log)
+
+
+def train(model: Model, log: Log) -> Model:
+    """``model`` with the s2/s3 tables trained on its scenario read in: the artefact of
+    :func:`export_tables` written to a temporary file and read back as a config's ``tables_file`` is
+    (:func:`tables_file.load_into`); the model names no file afterwards (its config hash carries the
+    tables' digest)."""
+    with tempfile.TemporaryDirectory(prefix="mpcgen-tables-") as tmp:
+        path = Path(tmp) / "trained_tables.json"
+        export_tables(model, path, log)
+        trained = tables_file.load_into(model.with_controller(tables_file=str(path)))
+    log(f"training stage: tables trained on the scenario of {model.name} (write them once with "
+        f"`mpcgen tables {model.source} --derive -o FILE` and set controller.tables_file to skip this stage)")
+    return trained.with_controller(tables_file=None)
 
 
 def export_tables(model: Model, path: Path, log: Log) -> str:
@@ -101,20 +118,29 @@ def export_tables(model: Model, path: Path, log: Log) -> str:
             f"s2 {thin['s2']}, s3 {thin['s3']}); name it in the config as controller.tables_file")
 
 
+# -- simulation facet: the closed loop, period by period, its trace and metrics, the on-board plant --
+decision_field = sim.DECISION_FIELD
+closed_loop_trace = sim.SIMULATOR.closed_loop_trace
+period_stepper = sim.SIMULATOR.period_stepper
+trace_from = sim.trace_from
+trace_metrics = sim.trace_metrics
+firmware_plant = sim.SIMULATOR.firmware_plant
+
+
 if TYPE_CHECKING:  # mypy checks this module against the protocol it implements
     from codegen.topologies.twolevel import plugin as _this
     from codegen.topology import Topology
 
-    _implements: Topology = _this
+    _implements: Topology[TwoLevelTables] = _this
 
 
-def essential_ops(model: Model, tables: Any) -> dict[str, dict[str, int]]:
+def essential_ops(model: Model, tables: TwoLevelTables) -> dict[str, dict[str, int]]:
     """Essential operations per step and per candidate (``opcount``): the cycle bound."""
     from codegen.topologies.twolevel import opcount
 
     return opcount.essential_ops(tables)
 
 
-def op_multiplicities(model: Model, tables: Any, states: np.ndarray, expected: np.ndarray) -> dict[str, np.ndarray]:
+def op_multiplicities(model: Model, tables: TwoLevelTables, states: np.ndarray, expected: np.ndarray) -> dict[str, np.ndarray]:
     """Per state, how often each unit of ``essential_ops`` runs: the output's ``n_eval`` candidates."""
     return {"per_candidate": expected["n_eval"]}

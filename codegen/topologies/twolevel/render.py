@@ -1,6 +1,8 @@
 """Template context of the two-level step: values to print, already derived."""
 from __future__ import annotations
 
+from typing import Any
+
 from codegen.model import Model
 from codegen.render import TableRow, render_step, render_step_cdef, sincos_bound, step_context, table_fields
 from codegen.topologies.twolevel.derive import DQ, TwoLevelTables
@@ -17,7 +19,7 @@ def _row_labels(t: TwoLevelTables) -> list[str]:
     return [f"{names[c]}, sector {s + 1}" for c in range(t.n_conditions) for s in range(t.n_sectors)]
 
 
-def two_level_context(model: Model, t: TwoLevelTables, target: str) -> dict:
+def two_level_context(model: Model, t: TwoLevelTables, target: str) -> dict[str, Any]:
     """Template context: values to print, already derived."""
     rows = [
         TableRow(tuple(r) + (0,) * (N_VECTORS - len(r)), f"{lab}: " + " ".join(f"V{v}" for v in r))

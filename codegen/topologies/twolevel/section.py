@@ -1,0 +1,71 @@
+"""The two-level MPTC's part of the configuration (loaded by :mod:`codegen.config` through the registry).
+
+Its strategies, the config fields only the two-level controller has (their
+checks, in the order they are checked, after the common ones), the
+consistency checks between them and the operating point, and the artefact a
+config names (the trained s2/s3 switch tables, read at load time).  A field
+listed here is refused in a config of another topology.
+"""
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+from typing import NoReturn
+
+from codegen.config import INT, PATH, Ref, Spec, choice_spec, closed, closed_open, open_closed, real_spec
+from codegen.model import COST_FORMS, PSI_REFS, Model
+from codegen.operating import Finding, g4
+
+__all__ = ["strategies", "fields", "narrowed", "check", "operating_findings", "resolve"]
+
+#: every strategy, in report order; the first is the baseline the others are compared to
+strategies: tuple[str, ...] = ("conventional", "s1", "s2", "s3")
+
+#: the two-level controller's own fields (mptc-two-level: predictor, tables, flux reference, cost)
+fields: dict[str, Spec] = {
+    "controller.predictor": choice_spec(("flux-geometry", "dq-euler"), required=True),
+    "controller.tables": choice_spec(("derived", "published"), required=True),
+    "controller.tables_file": Spec(PATH),
+    "controller.psi_ref_wb": real_spec(open_closed(0, 10), required=True),
+    "controller.psi_ref": choice_spec(PSI_REFS),
+    "controller.cost": choice_spec(COST_FORMS),
+    "controller.eps_t_nm": real_spec(closed_open(0, Ref("motor.rated_torque_nm")), required=True),
+    "controller.derivation.coverage": real_spec(open_closed(0, 1)),
+    "controller.derivation.max_active": Spec(INT, closed(1, 6)),
+}
+
+#: common fields whose allowed values the two-level narrows (none)
+narrowed: dict[str, Spec] = {}
+
+
+def check(values: Mapping[str, object], fail: Callable[[str, object, str], NoReturn]) -> None:
+    """Consistency between the two-level fields (after every field passed its own check)."""
+    if values["controller.predictor"] == "flux-geometry" and values["motor.ld_h"] != values["motor.lq_h"]:
+        fail("controller.predictor", values["controller.predictor"],
+             'flux-geometry predictor needs Ld == Lq (surface PMSM); use predictor = "dq-euler" '
+             f"(motor.ld_h = {values['motor.ld_h']:g}, motor.lq_h = {values['motor.lq_h']:g})")
+    if values["controller.tables_file"] is not None and values["controller.tables"] != "derived":
+        fail("controller.tables_file", values["controller.tables_file"],
+             "names the switch tables derived by a training run, which only controller.tables = 'derived' "
+             f"uses (controller.tables = '{values['controller.tables']}')")
+
+
+def operating_findings(model: Model) -> list[Finding]:
+    """The flux reference psi* must be reachable at rated speed: omega_e psi* <= 2 Udc/pi."""
+    m, c = model.motor, model.controller
+    w_e = m.rated_speed_rpm * 2.0 * math.pi / 60.0 * m.pole_pairs
+    v_six_step = 2.0 * model.inverter.udc_v / math.pi
+    v_flux = w_e * c.psi_ref_wb
+    if v_flux > v_six_step:
+        return [Finding("controller.psi_ref_wb", c.psi_ref_wb,
+                        f"needs omega_e psi* = {g4(v_flux)} V at rated speed, more than the inverter "
+                        f"gives (2 Udc/pi = {g4(v_six_step)} V)", True)]
+    return []
+
+
+def resolve(model: Model) -> Model:
+    """The model with the trained s2/s3 tables its ``controller.tables_file`` names read in (the file is
+    read and checked against the config; no compiler, no run)."""
+    from codegen.topologies.twolevel.tables_file import load_into
+
+    return load_into(model)
