@@ -22,6 +22,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from importlib.metadata import entry_points
 from pathlib import Path
+from typing import Any
 
 from codegen import __version__, cliargs
 from codegen.errors import ConfigError, MpcgenError, UsageError
@@ -113,7 +114,7 @@ def _strategies(args: argparse.Namespace, model: Model) -> list[str]:
                                  topology_of(model).strategies)
 
 
-def write_json(path: str | Path | None, data: dict) -> None:
+def write_json(path: str | Path | None, data: dict[str, Any]) -> None:
     """Write ``data`` as indented JSON with sorted keys (folders created); nothing when ``path`` is None."""
     if path:
         Path(path).parent.mkdir(parents=True, exist_ok=True)

@@ -12,6 +12,7 @@ import dataclasses
 import functools
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import jinja2
 
@@ -46,21 +47,22 @@ def placed_profile(target: str, placement: str) -> Profile:
     return p
 
 
-PROFILES: dict[str, Profile] = {
-    "host": Profile("host", "", "", "x86-64 host (cffi build, verification)"),
-    "stm32h743": Profile(
+#: the profile of every ``target.name`` (codegen.model.TARGETS), by its name
+PROFILES: dict[str, Profile] = {p.name: p for p in (
+    Profile("host", "", "", "x86-64 host (cffi build, verification)"),
+    Profile(
         "stm32h743",
         '__attribute__((section(".itcm_text")))',
         '__attribute__((section(".dtcm_rodata")))',
         "STM32H743 Cortex-M7: step in ITCM, tables in DTCM (RM0433 memory map)",
     ),
-    "tms320f28377": Profile(
+    Profile(
         "tms320f28377",
         "",
         "",
         "TMS320F28377 C28x+FPU32: 16-bit char/int, no double; step in .TI.ramfunc",
     ),
-}
+)}
 
 
 @dataclass(frozen=True)
@@ -96,7 +98,7 @@ def interleave_lines(blocks: list[str]) -> list[str]:
     return [ls[i] for i in range(max(map(len, lines), default=0)) for ls in lines if i < len(ls)]
 
 
-def base_context(model: Model, target: str) -> dict:
+def base_context(model: Model, target: str) -> dict[str, Any]:
     """Context every generated file of ``model`` shares (with the number format's macro library)."""
     if target not in PROFILES:
         raise ValueError(f"unknown target {target!r}; allowed: {', '.join(PROFILES)}")
@@ -113,7 +115,7 @@ def base_context(model: Model, target: str) -> dict:
     }
 
 
-def render_files(templates: dict[str, str], ctx: dict) -> dict[str, str]:
+def render_files(templates: dict[str, str], ctx: dict[str, Any]) -> dict[str, str]:
     """File name -> rendered text, for file name -> template path (in the context's number format)."""
     env = environment(ctx.get("number_format"))
     return {name: env.get_template(tpl).render(ctx) for name, tpl in templates.items()}
@@ -138,7 +140,7 @@ def sincos_context(nf: NumberFormat) -> dict[str, object]:
 
 
 def step_context(model: Model, target: str, records: tuple[Record, Record],
-                 faults: tuple[tuple[str, int, str], ...], **values: object) -> dict:
+                 faults: tuple[tuple[str, int, str], ...], **values: object) -> dict[str, Any]:
     """Context of a topology's step templates: the shared part (banner, number format, records,
     fault bits) plus the topology's own ``values`` (constants, tables, guard checks ...)."""
     nf = number_format(model.controller.number_format).scaled(values.get("scaling"))
@@ -167,14 +169,14 @@ def table_fields(tables: object) -> dict[str, object]:
     return {f.name: getattr(tables, f.name) for f in dataclasses.fields(tables)}  # type: ignore[arg-type]
 
 
-def render_step(model: Model, topology_dir: str, ctx: dict) -> dict[str, str]:
+def render_step(model: Model, topology_dir: str, ctx: dict[str, Any]) -> dict[str, str]:
     """File name -> text of a step: ``<topology_dir>/mpc.h.j2``, ``mpc.c.j2`` and the shared binding."""
     p = model.prefix
     return render_files({f"{p}_mpc.h": f"{topology_dir}/mpc.h.j2", f"{p}_mpc.c": f"{topology_dir}/mpc.c.j2",
                          "mpc_binding.h": "common/binding.h.j2"}, ctx)
 
 
-def render_step_cdef(ctx: dict) -> str:
+def render_step_cdef(ctx: dict[str, Any]) -> str:
     """cffi declarations (no preprocessor lines) of a step's host build."""
     return render_files({"cdef": "common/cdef.h.j2"}, ctx)["cdef"]
 

@@ -7,6 +7,7 @@ from contextlib import contextmanager
 from typing import Any
 
 from codegen.model import Model
+from codegen.stages.firmware import EMULATED_BOARD
 
 from .link import SerialLink, open_link
 from .virtual import VirtualBoard, build_virtual_board
@@ -16,7 +17,7 @@ __all__ = ["BOARDS", "QEMU_BOARD", "VIRTUAL", "open_board"]
 #: name of the virtual board (the host port built with the protocol, on a pseudo-terminal)
 VIRTUAL = "virtual"
 #: name of the emulated board (the qemu-m7 port built with the protocol, in QEMU, UART on a TCP socket)
-QEMU_BOARD = "qemu-m7"
+QEMU_BOARD = EMULATED_BOARD
 #: boards the harness starts itself
 BOARDS = (VIRTUAL, QEMU_BOARD)
 

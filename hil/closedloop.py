@@ -75,7 +75,7 @@ class _Board:
 
 
 def closed_loop(session: Session, model: Model, tables: Any, *, show_progress: bool = True,
-                log: Callable[[str], None] = lambda _: None) -> dict:
+                log: Callable[[str], None] = lambda _: None) -> dict[str, Any]:
     """Run the model's scenario with the session's board in the loop; the JSON-ready summary."""
     schema = session.schema
     info = session.info if session.info is not None else session.handshake()
@@ -133,7 +133,7 @@ def closed_loop(session: Session, model: Model, tables: Any, *, show_progress: b
     return summary
 
 
-def summary_line(data: dict) -> str:
+def summary_line(data: dict[str, Any]) -> str:
     """The one-line result of a closed-loop run."""
     m = data["metrics"] or {}
     same = "identical to simulate" if data["identical_to_simulate"] else (

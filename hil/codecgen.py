@@ -15,6 +15,7 @@ each printed exactly through the float32 number format's literal.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -72,7 +73,7 @@ def _ops(lay: RecordLayout) -> list[Op]:
     return ops
 
 
-def _record(name: str, lay: RecordLayout, ctype: str, define: bool) -> dict:
+def _record(name: str, lay: RecordLayout, ctype: str, define: bool) -> dict[str, Any]:
     return {"name": name, "record": lay.record.name, "ctype": ctype, "define": define,
             "members": lay.members, "octets": lay.packed_dtype.itemsize, "ops": _ops(lay)}
 

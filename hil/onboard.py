@@ -134,7 +134,7 @@ def _collect(session: Session, seq: int, n_samples: int, silence_s: float, prog:
 
 
 def onboard(session: Session, model: Model, tables: Any, *, decimation: int = 1, show_progress: bool = True,
-            log: Callable[[str], None] = lambda _: None) -> dict:
+            log: Callable[[str], None] = lambda _: None) -> dict[str, Any]:
     """Run the model's scenario on the board (plant and controller there); the JSON-ready summary."""
     schema = session.schema
     info = session.info if session.info is not None else session.handshake()
@@ -202,7 +202,7 @@ def onboard(session: Session, model: Model, tables: Any, *, decimation: int = 1,
     }
 
 
-def summary_line(data: dict) -> str:
+def summary_line(data: dict[str, Any]) -> str:
     """The one-line result of an on-board run."""
     cmp = data["comparison"] or {}
     parts = "  ".join(f"{k} {v['board']:.4g}/{v['host']:.4g}{'' if v['ok'] else ' OUT'}" for k, v in cmp.items())

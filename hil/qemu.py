@@ -49,7 +49,7 @@ TIMEOUT_S = 10.0
 
 def port_icount_shift() -> int:
     """The -icount shift the qemu-m7 port counts instructions for (its port_config.h PORT_ICOUNT_SHIFT)."""
-    text = (firmware_dir() / "ports" / "qemu-m7" / "port_config.h").read_text()
+    text = (firmware_dir() / "ports" / QEMU_BOARD / "port_config.h").read_text()
     found = re.search(r"^#define PORT_ICOUNT_SHIFT (\d+)", text, re.M)
     if found is None:
         raise EmulationError("firmware/ports/qemu-m7/port_config.h defines no PORT_ICOUNT_SHIFT")
@@ -78,7 +78,7 @@ class QemuBoard:
         self.image = Path(image)
         self.log = log or self.image.with_suffix(".qemu.log")
         self.start_timeout_s = start_timeout_s
-        self.proc: subprocess.Popen | None = None
+        self.proc: subprocess.Popen[bytes] | None = None
         self.port = 0
         self.url = ""
 

@@ -29,7 +29,7 @@ DETAILS = 3
 
 
 def replay(session: Session, model: Model, tables: Any, sets: dict[str, np.ndarray], *, show_progress: bool = True,
-           log: Callable[[str], None] = lambda _: None) -> dict:
+           log: Callable[[str], None] = lambda _: None) -> dict[str, Any]:
     """Replay ``sets`` (source -> states) on the session's board; the JSON-ready summary."""
     schema = session.schema
     info = session.info

@@ -29,6 +29,7 @@ import time
 from collections import Counter, OrderedDict, deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -60,10 +61,10 @@ class RunStats:
     unexpected: int = 0  # RESULTs of sequence numbers never sent
     resets: int = 0  # INFO mid-run
     silent: bool = False
-    discarded: Counter = field(default_factory=Counter)  # harness side: cobs, short, crc, oversize, length
-    board_errors: Counter = field(default_factory=Counter)  # ERROR messages by name
+    discarded: Counter[str] = field(default_factory=Counter)  # harness side: cobs, short, crc, oversize, length
+    board_errors: Counter[str] = field(default_factory=Counter)  # ERROR messages by name
 
-    def as_dict(self) -> dict:
+    def as_dict(self) -> dict[str, Any]:
         return {"frames_sent": self.frames_sent, "resent_states": self.resent_states, "duplicates": self.duplicates,
                 "unexpected": self.unexpected, "resets": self.resets, "silent": self.silent,
                 "discarded": dict(self.discarded), "board_errors": dict(self.board_errors)}

@@ -55,7 +55,7 @@ class VirtualBoard:
     def __init__(self, image: Path, log: Path | None = None) -> None:
         self.image = Path(image)
         self.log = log or self.image.with_suffix(".stderr")
-        self.proc: subprocess.Popen | None = None
+        self.proc: subprocess.Popen[bytes] | None = None
         self.url = ""
         self._slave = -1
 

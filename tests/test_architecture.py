@@ -294,3 +294,16 @@ def test_checker_exempts_only_the_registry():
 def test_cross_topology_checker(snippet: str, hit: bool):
     found = cross_topology_findings(snippet, "x.py", "codegen.topologies.twolevel.x", "twolevel", ["ttype"])
     assert bool(found) == hit, found
+
+
+def test_targets_profiles_and_boards_are_one_enumeration():
+    """Every config target has exactly one render profile, every firmware board renders one of them, and
+    the emulated board is one of the boards (each name written once, in its own record)."""
+    from codegen.model import TARGETS
+    from codegen.render import PROFILES
+    from codegen.stages.firmware import BOARDS, EMULATED_BOARD
+    from hil.boards import QEMU_BOARD
+
+    assert set(PROFILES) == set(TARGETS)
+    assert all(b.profile in PROFILES and b.name == name for name, b in BOARDS.items())
+    assert EMULATED_BOARD in BOARDS and QEMU_BOARD == EMULATED_BOARD

@@ -146,7 +146,7 @@ def cdef(api: SimApi) -> str:
     return render_header(api) + "\n" + strip_preprocessor(api.plant_header.read_text()) + "\n"
 
 
-def sim_sources(api: SimApi):
+def sim_sources(api: SimApi) -> SimSources:
     """The :class:`~codegen.hostbuild.SimSources` of a host build (renders the header)."""
 
     header = header_path(api)

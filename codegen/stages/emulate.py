@@ -28,6 +28,7 @@ import numpy as np
 from codegen.errors import MpcgenError
 from codegen.model import Model
 from codegen.stages.firmware import (
+    EMULATED_BOARD,
     ICOUNT_SHIFT,
     QEMU,
     build_firmware,
@@ -216,8 +217,8 @@ def run_and_check(model: Model, tables: Any, workdir: Path, *, n_selftest: int =
     """
     inp, out = layouts(model)
     workdir = Path(workdir)
-    write_firmware_project(model, tables, "qemu-m7", workdir, n_selftest, n_bench=n_bench)
-    build = build_firmware(workdir, "qemu-m7")
+    write_firmware_project(model, tables, EMULATED_BOARD, workdir, n_selftest, n_bench=n_bench)
+    build = build_firmware(workdir, EMULATED_BOARD)
     run = run_qemu(build.image, timeout_s=timeout_s, icount_shift=icount_shift)
     if run.timed_out:
         raise EmulationError(f"QEMU did not finish within {timeout_s} s (killed); last output: {run.uart[-300:]!r}")

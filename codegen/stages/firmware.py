@@ -129,17 +129,21 @@ HOST_GCC = Tool("gcc", "install the Debian package gcc (apt-get install gcc)")
 CL2000 = Tool("cl2000", "TI's C2000 code generation tools are not packaged by Debian: install Code Composer "
               "Studio or the C2000 CGT and put cl2000 on PATH (or set C2000_CGT_ROOT)")
 
-BOARDS: dict[str, Board] = {
-    "stm32h743": Board("stm32h743", "stm32h743", "arm", ("cortex-m7", "stm32h743"), "stm32h743.ld",
-                       1792 * 1024, (ARM_GCC, MAKE), "NUCLEO-H743ZI2, 400 MHz, step in ITCM, tables in DTCM"),
-    "qemu-m7": Board("qemu-m7", "stm32h743", "arm", ("cortex-m7", "qemu-m7"), "qemu_m7.ld",
-                     3584 * 1024, (ARM_GCC, MAKE, QEMU), "QEMU mps2-an500 emulated Cortex-M7",
-                     " ".join(qemu_command("$(IMAGE)", "stdio"))),
-    "tms320f28377": Board("tms320f28377", "tms320f28377", "c28x", ("tms320f28377",), "f28377s.cmd",
-                          448 * 1024, (CL2000,), "LAUNCHXL-F28377S, C28x + FPU32 at 200 MHz"),
-    "host": Board("host", "host", "host", ("host",), "", None, (HOST_GCC, MAKE),
-                  "host program (sanitizer builds)", "./$(IMAGE)"),
-}
+#: the emulated Cortex-M7 (QEMU mps2-an500): the board of ``bench --emulated`` and of ``hil --board``
+EMULATED_BOARD = "qemu-m7"
+
+#: every board a firmware project is written for, by name (its port folder under firmware/ports/)
+BOARDS: dict[str, Board] = {b.name: b for b in (
+    Board("stm32h743", "stm32h743", "arm", ("cortex-m7", "stm32h743"), "stm32h743.ld",
+          1792 * 1024, (ARM_GCC, MAKE), "NUCLEO-H743ZI2, 400 MHz, step in ITCM, tables in DTCM"),
+    Board(EMULATED_BOARD, "stm32h743", "arm", ("cortex-m7", EMULATED_BOARD), "qemu_m7.ld",
+          3584 * 1024, (ARM_GCC, MAKE, QEMU), "QEMU mps2-an500 emulated Cortex-M7",
+          " ".join(qemu_command("$(IMAGE)", "stdio"))),
+    Board("tms320f28377", "tms320f28377", "c28x", ("tms320f28377",), "f28377s.cmd",
+          448 * 1024, (CL2000,), "LAUNCHXL-F28377S, C28x + FPU32 at 200 MHz"),
+    Board("host", "host", "host", ("host",), "", None, (HOST_GCC, MAKE),
+          "host program (sanitizer builds)", "./$(IMAGE)"),
+)}
 
 
 def board_spec(board: str) -> Board:
@@ -174,7 +178,7 @@ class TestSet:
     out: RecordLayout
     full: bool = True
 
-    def context(self) -> dict:
+    def context(self) -> dict[str, Any]:
         """Values the template prints."""
         ctx = {"name": self.name, "doc": self.doc, "n": len(self.states), "dump": self.dump,
                "full": self.full, "states": self.inp.rows(self.states)}

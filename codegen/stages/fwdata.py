@@ -19,7 +19,7 @@ from codegen.model import Model
 from codegen.numfmt import FLOAT_CONTROLLER, number_format
 from codegen.records import RecordLayout
 from codegen.teststates import in_format
-from codegen.topology import Topology, topology_of
+from codegen.topology import Reference, topology_of
 
 __all__ = ["SELFTEST_SEED", "layouts", "in_step_format", "selftest_states", "trajectory_states", "expected_outputs",
            "evenly_spaced"]
@@ -73,7 +73,7 @@ def trajectory_states(model: Model, n: int) -> np.ndarray:
     return evenly_spaced(traj.states, n)
 
 
-def expected_outputs(topo: Topology, tables: Any, states: np.ndarray) -> np.ndarray:
+def expected_outputs(topo: Reference[Any], tables: Any, states: np.ndarray) -> np.ndarray:
     """The reference's outputs; every real output must be finite (an input-guard bug otherwise)."""
     out = topo.step_batch(tables, states)
     for name in out.dtype.names or ():

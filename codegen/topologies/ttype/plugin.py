@@ -119,20 +119,10 @@ def export_tables(model: Model, path: Path, log: Log) -> NoReturn:
                       f"no training run; {model.source} has nothing to export (see `mpcgen tables` for them)")
 
 
-# -- simulation facet: the closed loop, period by period, its trace and metrics, the on-board plant --
-decision_field = sim.DECISION_FIELD
-closed_loop_trace = sim.SIMULATOR.closed_loop_trace
-period_stepper = sim.SIMULATOR.period_stepper
-trace_from = sim.trace_from
-trace_metrics = sim.trace_metrics
-firmware_plant = sim.SIMULATOR.firmware_plant
-
-
-if TYPE_CHECKING:  # mypy checks this module against the protocol it implements
-    from codegen.topologies.ttype import plugin as _this
-    from codegen.topology import Topology
-
-    _implements: Topology[ThreeLevelTables] = _this
+# -- simulation facet: this topology's simulator (sim.py) --
+decision_field, trace_from, trace_metrics = sim.DECISION_FIELD, sim.trace_from, sim.trace_metrics
+closed_loop_trace, period_stepper, firmware_plant = (sim.SIMULATOR.closed_loop_trace, sim.SIMULATOR.period_stepper,
+                                                     sim.SIMULATOR.firmware_plant)
 
 
 def essential_ops(model: Model, tables: ThreeLevelTables) -> dict[str, dict[str, int]]:
@@ -149,3 +139,10 @@ def op_multiplicities(model: Model, tables: ThreeLevelTables, states: np.ndarray
     deadbeat = ref.deadbeat_counts(tables, states)
     return {"per_candidate": expected["n_eval"], "per_member": expected["n_members"],
             "per_virtual_member": deadbeat["virtual"], "per_unclamped": deadbeat["unclamped"]}
+
+
+if TYPE_CHECKING:  # mypy checks this module against the protocol it implements
+    from codegen.topologies.ttype import plugin as _this
+    from codegen.topology import Topology
+
+    _implements: Topology[ThreeLevelTables] = _this

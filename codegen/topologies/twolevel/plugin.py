@@ -118,20 +118,10 @@ def export_tables(model: Model, path: Path, log: Log) -> str:
             f"s2 {thin['s2']}, s3 {thin['s3']}); name it in the config as controller.tables_file")
 
 
-# -- simulation facet: the closed loop, period by period, its trace and metrics, the on-board plant --
-decision_field = sim.DECISION_FIELD
-closed_loop_trace = sim.SIMULATOR.closed_loop_trace
-period_stepper = sim.SIMULATOR.period_stepper
-trace_from = sim.trace_from
-trace_metrics = sim.trace_metrics
-firmware_plant = sim.SIMULATOR.firmware_plant
-
-
-if TYPE_CHECKING:  # mypy checks this module against the protocol it implements
-    from codegen.topologies.twolevel import plugin as _this
-    from codegen.topology import Topology
-
-    _implements: Topology[TwoLevelTables] = _this
+# -- simulation facet: this topology's simulator (sim.py) --
+decision_field, trace_from, trace_metrics = sim.DECISION_FIELD, sim.trace_from, sim.trace_metrics
+closed_loop_trace, period_stepper, firmware_plant = (sim.SIMULATOR.closed_loop_trace, sim.SIMULATOR.period_stepper,
+                                                     sim.SIMULATOR.firmware_plant)
 
 
 def essential_ops(model: Model, tables: TwoLevelTables) -> dict[str, dict[str, int]]:
@@ -144,3 +134,10 @@ def essential_ops(model: Model, tables: TwoLevelTables) -> dict[str, dict[str, i
 def op_multiplicities(model: Model, tables: TwoLevelTables, states: np.ndarray, expected: np.ndarray) -> dict[str, np.ndarray]:
     """Per state, how often each unit of ``essential_ops`` runs: the output's ``n_eval`` candidates."""
     return {"per_candidate": expected["n_eval"]}
+
+
+if TYPE_CHECKING:  # mypy checks this module against the protocol it implements
+    from codegen.topologies.twolevel import plugin as _this
+    from codegen.topology import Topology
+
+    _implements: Topology[TwoLevelTables] = _this

@@ -25,6 +25,7 @@ import json
 import os
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -104,7 +105,7 @@ def derived_tables(model: Model, progress: Progress | None = None) -> tuple[Swit
     return tables["s2"], tables["s3"], counts
 
 
-def export_tables(model: Model, path: Path, progress: Progress | None = None) -> dict:
+def export_tables(model: Model, path: Path, progress: Progress | None = None) -> dict[str, Any]:
     """Run (or reuse) the training and write the tables artefact to ``path``."""
     train = training_model(model)
     s2, s3, counts = derived_tables(model.with_controller(tables="derived", tables_file=None, trained_tables=None),

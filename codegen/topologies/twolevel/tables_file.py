@@ -72,7 +72,7 @@ def _as_lists(table: SwitchTable) -> list[list[list[int]]]:
 
 
 def write_tables_file(path: Path, train: Model, counts: dict[str, np.ndarray], tables: dict[str, Any],
-                      thin: dict[str, np.ndarray], min_cell_samples: int) -> dict:
+                      thin: dict[str, np.ndarray], min_cell_samples: int) -> dict[str, Any]:
     """Write the artefact; return what was written."""
     sc, c = train.scenario, train.controller
     data = {

@@ -52,3 +52,18 @@ def spmsm_model() -> Model:
 def stub(tmp_path_factory):
     """(ffi, lib): the two-level simulator + stub controller, strict flags, cffi ABI mode."""
     return build_stub_library(SIM, STUB_CDEF, tmp_path_factory.mktemp("stub_build"))
+
+
+@pytest.fixture(scope="session")
+def spmsm_tables_file(tmp_path_factory) -> tuple[Path, Path]:
+    """A copy of the SPMSM example and its trained-tables file (``t/spmsm_tables.json`` next to it), written
+    by ``mpcgen tables --derive`` (one training run for every test that needs it)."""
+    import shutil
+
+    from codegen.cli import main
+
+    d = tmp_path_factory.mktemp("trained")
+    cfg = d / "spmsm.toml"
+    shutil.copy(ROOT / "examples" / "seed001_spmsm.toml", cfg)
+    assert main(["tables", str(cfg), "--derive", "-o", str(d / "t" / "spmsm_tables.json"), "-q"]) == 0
+    return cfg, d / "t" / "spmsm_tables.json"

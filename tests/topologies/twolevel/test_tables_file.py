@@ -19,14 +19,10 @@ from codegen.topology import topology_of
 from conftest import EXAMPLES, SPMSM
 
 
-@pytest.fixture(scope="module")
-def derived(tmp_path_factory) -> tuple[Path, Path]:
-    """A copy of the SPMSM example and the tables file derived from it (one training run)."""
-    d = tmp_path_factory.mktemp("tables")
-    cfg = d / "spmsm.toml"
-    shutil.copy(SPMSM, cfg)
-    assert main(["tables", str(cfg), "--derive", "-o", str(d / "t" / "spmsm_tables.json"), "-q"]) == 0
-    return cfg, d / "t" / "spmsm_tables.json"
+@pytest.fixture
+def derived(spmsm_tables_file) -> tuple[Path, Path]:
+    """A copy of the SPMSM example and its trained-tables file (conftest's, one training run)."""
+    return spmsm_tables_file
 
 
 def test_file_holds_tables_counts_and_provenance(derived):

@@ -19,17 +19,11 @@ from codegen.topologies.twolevel import switch_tables
 from codegen.topologies.twolevel.tables_file import load_into
 from codegen.topology import topology_of
 
-from conftest import SPMSM
 
-
-@pytest.fixture(scope="module")
-def tables(tmp_path_factory) -> tuple[Path, Path]:
-    """A copy of the SPMSM example and its trained-tables file (``t/spmsm_tables.json`` next to it)."""
-    d = tmp_path_factory.mktemp("trained")
-    cfg = d / "spmsm.toml"
-    shutil.copy(SPMSM, cfg)
-    assert main(["tables", str(cfg), "--derive", "-o", str(d / "t" / "spmsm_tables.json"), "-q"]) == 0
-    return cfg, d / "t" / "spmsm_tables.json"
+@pytest.fixture
+def tables(spmsm_tables_file) -> tuple[Path, Path]:
+    """A copy of the SPMSM example and its trained-tables file (conftest's, one training run)."""
+    return spmsm_tables_file
 
 
 def _with_file(cfg: Path, name: str, strategy: str = "s2", **more: object):
