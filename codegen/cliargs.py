@@ -7,12 +7,14 @@ of work or as a traceback.  Failures raise :class:`codegen.errors.UsageError`
 """
 from __future__ import annotations
 
+import argparse
 import math
 import os
 from pathlib import Path
 
 from codegen.errors import UsageError
 from codegen.model import Model
+from codegen.outputs import output_error
 
 __all__ = ["at_least", "output_dir", "output_file", "strategy_list", "sweep_values", "check_sweep_eps"]
 
@@ -33,15 +35,34 @@ def _writable_dir(option: str, d: Path, what: str) -> None:
     except FileExistsError:
         raise UsageError(f"{option} = {d}: {what} exists and is not a folder") from None
     except OSError as exc:
-        raise UsageError(f"{option} = {d}: cannot create the {what} ({exc.strerror or exc})") from None
+        raise UsageError(f"{option}: {output_error(exc, d)}") from None
     if not os.access(d, os.W_OK | os.X_OK):
         raise UsageError(f"{option} = {d}: the {what} is not writable")
+
+
+def count(text: str) -> int:
+    """A whole number of things as the docs write it: ``1000000``, ``1_000_000`` or ``1e6``."""
+    try:
+        return int(text)
+    except ValueError:
+        pass
+    try:
+        x = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number (e.g. 1000000 or 1e6)") from None
+    if not (x.is_integer() and abs(x) < 2**63):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number (e.g. 1000000 or 1e6)")
+    return int(x)
 
 
 def output_dir(option: str, path: str | Path) -> Path:
     """A folder the command may write into (created if missing)."""
     d = Path(path)
-    if d.exists() and not d.is_dir():
+    try:
+        exists = d.exists()
+    except OSError as exc:  # a name too long: exists() raises rather than answers
+        raise UsageError(f"{option}: {output_error(exc, d)}") from None
+    if exists and not d.is_dir():
         raise UsageError(f"{option} = {d}: exists and is not a folder; give a folder to write into")
     _writable_dir(option, d, "output folder")
     return d
@@ -52,6 +73,10 @@ def output_file(option: str, path: str | Path | None) -> Path | None:
     if path is None:
         return None
     f = Path(path)
+    try:
+        f.exists()
+    except OSError as exc:  # a name too long: exists() raises rather than answers
+        raise UsageError(f"{option}: {output_error(exc, f)}") from None
     if f.is_dir():
         raise UsageError(f"{option} = {f}: is a folder; give a file name")
     _writable_dir(option, f.parent, "folder of the output file")

@@ -23,6 +23,8 @@ from typing import Any
 
 import cffi
 
+from codegen import cache
+from codegen.cache import cache_root
 from codegen.errors import MpcgenError
 from codegen.model import Model
 from codegen.numfmt import NumberFormat
@@ -81,12 +83,6 @@ class HostLib:
         return out
 
 
-def cache_root() -> Path:
-    """Build cache directory (MPCGEN_CACHE, else ~/.cache/mpcgen)."""
-    root = os.environ.get("MPCGEN_CACHE") or str(Path.home() / ".cache" / "mpcgen")
-    return Path(root)
-
-
 def compiler() -> str:
     """The host C compiler (CC or gcc); a clear error if there is none."""
     cc = os.environ.get("CC", "gcc")
@@ -110,7 +106,7 @@ def build_library(prefix: str, tag: str, files: dict[str, str], cdef: str, recor
     Cached by a hash of every input byte.
     """
     api = sim.api.read_text() if sim else ""
-    key_src = [cdef, api, " ".join(STRICT_CFLAGS), cffi.__version__, sys.version]
+    key_src = [cache.LAYOUT, cdef, api, " ".join(STRICT_CFLAGS), cffi.__version__, sys.version]
     key_src += [files[k] for k in sorted(files)]
     if sim:
         key_src += [p.read_text() for p in (*sim.sources, *sim.headers)]
@@ -118,6 +114,11 @@ def build_library(prefix: str, tag: str, files: dict[str, str], cdef: str, recor
     modname = f"{tag}_{prefix}_{key}"
     bdir = cache_root() / modname
     so = _find_module(bdir, modname)
+    damaged = cache.sealed_ok(bdir, so) if so is not None and modname not in sys.modules else None
+    if damaged is not None:  # a truncated or edited library would crash the process when loaded
+        cache.warn(f"cache entry {bdir} is damaged ({damaged}); rebuilding it")
+        cache.discard(bdir)
+        so = None
     if so is None:
         # build in a private directory, then rename: parallel test workers may race
         tmp = bdir.with_name(f"{modname}.tmp{os.getpid()}")
@@ -140,6 +141,10 @@ def build_library(prefix: str, tag: str, files: dict[str, str], cdef: str, recor
             ffi.compile(tmpdir=str(tmp), verbose=False)
         except Exception as exc:  # cffi raises distutils/setuptools errors
             raise BuildError(f"linking the cffi module {modname} failed: {exc}") from exc
+        built = _find_module(tmp, modname)
+        if built is None:
+            raise BuildError(f"cffi produced no module in {tmp}")
+        cache.seal(tmp, built)
         try:
             os.replace(tmp, bdir)
         except OSError:  # another process finished first: use its build

@@ -298,7 +298,7 @@ def amplitude_spectrum(
     n_per = int(math.floor(avail / per_period + GRID_TOL))
     if n_per < 1:
         raise ValueError(
-            f"window [{t0}, {t1}) s holds {avail} samples, less than one fundamental "
+            f"window [{t0:.6g}, {t1:.6g}) s holds {avail} samples, less than one fundamental "
             f"period ({per_period:.1f} samples at {f1_hz:.4g} Hz)"
         )
     m = min(avail, int(round(n_per * per_period)))
@@ -584,3 +584,66 @@ def fault_counts(fault: Any, fault_bits: tuple[tuple[str, int, str], ...]) -> di
     f = np.asarray(fault, dtype=np.int64)
     return {"faults": int(np.count_nonzero(f)),
             "fault_counts": {name: int(np.count_nonzero(f & bit)) for name, bit, _ in fault_bits}}
+
+
+# ---------------------------------------------------------------------------
+# the simulator's own verdict on a run
+# ---------------------------------------------------------------------------
+#: the speed at the end of a constant-reference segment must be within this share of the rated speed plus
+#: this share of its reference (docs/simulation.md "Tracking verdict")
+SPEED_BAND_SHARE = 0.02
+#: the speed PI's output may sit at its limit for at most this share of a steady window
+SATURATED_SHARE_MAX = 0.5
+#: the samples at the end of a window the final speed is averaged over (the speed ripple is averaged out)
+END_SAMPLES = 20
+
+
+def tracking_verdict(trace: Any, model: Model) -> dict[str, Any]:
+    """Whether the drive did what the scenario asked, with the reasons when it did not:
+
+    * speed: at the end of each steady window (the last ``scenario.window_s`` of each constant-reference
+      segment) the mean of the last :data:`END_SAMPLES` speeds is within
+      ``SPEED_BAND_SHARE * (rated speed + |reference|)`` of the reference (mechanical speed mode only:
+      an imposed speed follows its reference by construction);
+    * torque: the speed PI's output T* is at +-``speed_loop.limit_nm`` for at most
+      :data:`SATURATED_SHARE_MAX` of each steady window (mechanical speed mode only);
+    * guard: no period tripped the step's input guard (current, voltage, speed limits).
+
+    Returns ``{"tracking": "ok" | "failed", "tracking_reasons": [one line each]}``.
+    """
+    reasons: list[str] = []
+    if model.scenario.speed_mode == "mechanical":
+        rated = model.motor.rated_speed_rpm * 2.0 * math.pi / 60.0
+        limit = model.speed_loop.limit_nm
+        for t0, t1 in steady_windows(model, model.scenario.window_s):
+            sl = window_slice(trace.dt_s, t0, t1, trace.n)
+            if sl.stop <= sl.start:
+                continue
+            end = slice(max(sl.start, sl.stop - END_SAMPLES), sl.stop)
+            ref = float(np.mean(trace.speed_ref_rad_s[end]))
+            got = float(np.mean(trace.omega_m_rad_s[end]))
+            band = SPEED_BAND_SHARE * (rated + abs(ref))
+            if abs(got - ref) > band:
+                reasons.append(f"speed {_rpm(got):.1f} r/min at {t1:g} s against a reference of {_rpm(ref):.1f} "
+                               f"r/min (band +-{_rpm(band):.1f} r/min)")
+            saturated = float(np.mean(np.abs(trace.torque_ref_nm[sl]) >= limit * (1.0 - 1e-9)))
+            if saturated > SATURATED_SHARE_MAX:
+                reasons.append(f"torque reference at the speed loop's limit +-{limit:g} N*m for "
+                               f"{100.0 * saturated:.0f} % of [{t0:g}, {t1:g}) s")
+    tripped = int(np.count_nonzero(np.asarray(trace.fault)))
+    if tripped:
+        reasons.append(f"the input guard tripped in {tripped} of {trace.n} periods (a current, voltage or speed "
+                       "limit was reached)")
+    return {"tracking": "failed" if reasons else "ok", "tracking_reasons": reasons}
+
+
+def _rpm(w_rad_s: float) -> float:
+    return w_rad_s * 60.0 / (2.0 * math.pi)
+
+
+def tracking_lines(failed: dict[str, list[str]]) -> list[str]:
+    """The table's verdict line(s): ``tracking: ok`` or one ``tracking FAILED`` line per failed run."""
+    if not failed:
+        return ["tracking: ok (speed within its band at the end of every segment, torque not held at the "
+                "limit, no guard trip)"]
+    return [f"tracking FAILED: {label}: {'; '.join(reasons)}" for label, reasons in failed.items()]

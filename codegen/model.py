@@ -30,6 +30,8 @@ PsiRef = Literal["constant", "mtpa"]
 CostForm = Literal["rated", "reference"]
 
 TARGETS: tuple[str, ...] = get_args(Target)
+#: the generated step's speed guard trips above this many times the rated electrical speed
+SPEED_GUARD_PER_RATED = 5.0
 FAULT_ACTIONS: tuple[str, ...] = get_args(FaultAction)
 PLACEMENTS: tuple[str, ...] = get_args(Placement)
 #: two-level flux reference psi*: controller.psi_ref_wb, or MTPA from the torque reference

@@ -17,9 +17,9 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from codegen.model import Model
+from codegen.model import SPEED_GUARD_PER_RATED, Model
 
-__all__ = ["Finding", "operating_findings", "g4"]
+__all__ = ["Finding", "operating_findings", "plausibility_findings", "g4"]
 
 
 @dataclass(frozen=True)
@@ -66,4 +66,63 @@ def operating_findings(model: Model) -> list[Finding]:
         out.append(Finding("speed_loop.limit_nm", sl.limit_nm,
                            f"asks for about {g4(i_limit)} A (limit / (1.5 p psi_f)), above inverter.i_trip_a = "
                            f"{g4(inv.i_trip_a)} A: accelerations at the limit will trip the guard", False))
+    out += plausibility_findings(model)
     return sorted(out, key=lambda f: not f.error)
+
+
+#: a mechanical time constant J omega_rated / T_rated above this, s, is more likely a unit slip than a motor
+TAU_M_MAX_S = 5.0
+#: viscous friction at rated speed above this share of the rated torque is more likely a unit slip
+FRICTION_SHARE_MAX = 0.2
+#: a back-EMF at rated speed below this share of Udc/sqrt(3) is more likely rad/s entered as r/min
+EMF_SHARE_MIN = 0.05
+#: an electrical time constant L/Rs below this many control periods leaves the current uncontrollable
+TAU_E_MIN_PERIODS = 2.0
+
+
+def plausibility_findings(model: Model) -> list[Finding]:
+    """Warnings for the unit slips engineers make, each checked against another field:
+
+    * mechanical time constant tau_m = J omega_m,rated / T_rated (time to reach rated speed at rated
+      torque): above :data:`TAU_M_MAX_S` suggests kg*cm^2 entered as kg*m^2;
+    * friction at rated speed B omega_m,rated against T_rated: above :data:`FRICTION_SHARE_MAX`;
+    * back-EMF at rated speed against Udc/sqrt(3): below :data:`EMF_SHARE_MIN` suggests rad/s entered as
+      r/min (or a motor far too small for the DC link);
+    * electrical time constant min(Ld, Lq)/Rs against the control period;
+    * the speed reference against the step's speed guard (``SPEED_GUARD_PER_RATED`` x rated).
+    """
+    m, inv, c = model.motor, model.inverter, model.controller
+    w_m = m.rated_speed_rpm * 2.0 * math.pi / 60.0
+    out: list[Finding] = []
+    tau_m = m.j_kgm2 * w_m / m.rated_torque_nm
+    if tau_m > TAU_M_MAX_S:
+        out.append(Finding("motor.j_kgm2", m.j_kgm2,
+                           f"gives a mechanical time constant J omega_rated/T_rated of {g4(tau_m)} s (more than "
+                           f"{g4(TAU_M_MAX_S)} s to reach rated speed at rated torque); kg*cm^2 entered as kg*m^2? "
+                           f"({g4(m.j_kgm2)} kg*cm^2 = {g4(m.j_kgm2 * 1e-4)} kg*m^2)", False))
+    friction = m.b_nms * w_m / m.rated_torque_nm
+    if friction > FRICTION_SHARE_MAX:
+        out.append(Finding("motor.b_nms", m.b_nms,
+                           f"takes {g4(100 * friction)} % of the rated torque at rated speed (B omega_rated = "
+                           f"{g4(m.b_nms * w_m)} N*m); is the unit N*m*s/rad (per rad/s of mechanical speed)?",
+                           False))
+    emf_share = w_m * m.pole_pairs * m.psi_f_wb / (inv.udc_v / math.sqrt(3.0))
+    if emf_share < EMF_SHARE_MIN:
+        out.append(Finding("motor.rated_speed_rpm", m.rated_speed_rpm,
+                           f"gives a back-EMF at rated speed of only {g4(100 * emf_share)} % of Udc/sqrt(3); rad/s "
+                           f"entered as r/min? ({g4(m.rated_speed_rpm)} rad/s = "
+                           f"{g4(m.rated_speed_rpm * 60.0 / (2.0 * math.pi))} r/min)", False))
+    tau_e = min(m.ld_h, m.lq_h) / m.rs_ohm
+    if tau_e < TAU_E_MIN_PERIODS * c.dt_s:
+        out.append(Finding("motor.ld_h", m.ld_h,
+                           f"gives an electrical time constant min(Ld, Lq)/Rs of {g4(tau_e)} s, less than "
+                           f"{g4(TAU_E_MIN_PERIODS)} control periods ({g4(c.dt_s)} s): the current changes more "
+                           "within one period than the controller can follow; inductance in H (e.g. 150e-6 for "
+                           "150 uH)?", False))
+    guard_rpm = SPEED_GUARD_PER_RATED * m.rated_speed_rpm
+    top = max(abs(v) for _, v in model.scenario.speed_ref_rpm)
+    if top > guard_rpm:
+        out.append(Finding("scenario.speed_ref_rpm", top,
+                           f"reaches {g4(top)} r/min, above the step's speed guard ({g4(SPEED_GUARD_PER_RATED)} x "
+                           f"rated = {g4(guard_rpm)} r/min): the controller trips there", False))
+    return out

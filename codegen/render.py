@@ -22,6 +22,7 @@ from codegen.kernels.trig import cos_names, horner_order, poly_text, sin_names, 
 from codegen.model import Model
 from codegen.numfmt import NumberFormat, number_format
 from codegen.numfmt.float32 import FLOAT32
+from codegen.outputs import output_error, write_atomic
 from codegen.records import REAL, Record
 from codegen.resources import templates_dir
 
@@ -211,14 +212,18 @@ def render_speed_pi(model: Model, target: str) -> dict[str, str]:
 
 def write_files(files: dict[str, str], outdir: Path) -> list[Path]:
     """Write relative paths -> text under ``outdir`` (folders created as needed), touching only the
-    files whose bytes change so that builds stay incremental; the paths, in name order."""
-    outdir.mkdir(parents=True, exist_ok=True)
+    files whose bytes change so that builds stay incremental; the paths, in name order.  Each file is
+    written through a temporary and renamed (:func:`codegen.outputs.write_atomic`): a full disk or a name
+    the file system refuses stops with one line and leaves no half-written file."""
     written = []
     for name, text in sorted(files.items()):
         path = outdir / name
-        path.parent.mkdir(parents=True, exist_ok=True)
         data = text.encode()
-        if not path.exists() or path.read_bytes() != data:
-            path.write_bytes(data)
+        try:
+            unchanged = path.is_file() and path.read_bytes() == data
+        except OSError as exc:
+            raise output_error(exc, path) from None
+        if not unchanged:
+            write_atomic(path, data)
         written.append(path)
     return written

@@ -107,3 +107,30 @@ def test_verify_runs_exactly_the_states_asked_for(tmp_path):
                  "-q"]) == 0
     r = json.loads(out.read_text())["strategies"]["conventional"]
     assert r["states"] == 5000 and sum(r["sources"].values()) == 5000 and r["sources"]["closed_loop"] == 400
+
+
+SERVO_EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "servo400w.toml"
+
+
+@pytest.mark.parametrize("field,value,fragments", [
+    ("motor.j_kgm2", 0.26, ("mechanical time constant", "64.32 s", "kg*cm^2 entered as kg*m^2?")),
+    ("motor.b_nms", 1.0, ("of the rated torque at rated speed", "N*m*s/rad")),
+    ("motor.rated_speed_rpm", 314.16, ("back-EMF at rated speed of only", "rad/s entered as r/min?")),
+    ("scenario.speed_ref_rpm", [[0.0, 20000.0]], ("above the step's speed guard", "5 x rated = 1.5e+04 r/min")),
+    ("motor.ld_h", 2e-5, ("electrical time constant", "less than 2 control periods")),
+])
+def test_unit_slips_warn_at_load_naming_the_field(field, value, fragments):
+    """The unit slips of the second user trial: each a warning at load naming the field and the likely slip."""
+    overrides: dict[str, object] = {field: value}
+    if field == "motor.ld_h":
+        overrides["motor.lq_h"] = value
+    warnings = load_config(SERVO_EXAMPLE, overrides).warnings
+    mine = [w for w in warnings if f": {field} = " in w]
+    assert len(mine) == 1, warnings
+    for f in fragments:
+        assert f in mine[0], mine[0]
+
+
+def test_examples_have_no_plausibility_warning():
+    for name in ("seed001_spmsm", "seed001_ipmsm", "servo400w", "seed000_tlevel"):
+        assert load_config(SERVO_EXAMPLE.parent / f"{name}.toml").warnings == (), name

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from codegen.kernels.trig import sincos_constants
-from codegen.model import Model
+from codegen.model import SPEED_GUARD_PER_RATED, Model
 from codegen.numfmt import NumberFormat, number_format
 from codegen.units import GUARD_UNITS
 
@@ -54,7 +54,7 @@ def guard_limits(model: Model, dc_min: str, dc_max: str, dc_scale: float) -> dic
         dc_min: inv.udc_min_v * dc_scale,
         dc_max: inv.udc_max_v * dc_scale,
         "ANGLE_GUARD_RAD": number_format(model.controller.number_format).angle_guard_rad,
-        "OMEGA_GUARD_RAD_S": 5.0 * rated_omega_e,
+        "OMEGA_GUARD_RAD_S": SPEED_GUARD_PER_RATED * rated_omega_e,
         "TORQUE_REF_GUARD_NM": 4.0 * max(sl.limit_nm, m.rated_torque_nm),
     }
 

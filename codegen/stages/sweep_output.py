@@ -20,6 +20,7 @@ from typing import Any
 
 from codegen import __version__
 from codegen.model import Model
+from codegen.outputs import write_atomic
 from codegen.plotting import save_figure
 from codegen.results import clean_json, metric_sets, versions, write_csv_rows
 
@@ -78,7 +79,7 @@ def flat_rows(data: dict[str, Any]) -> list[dict[str, Any]]:
 
 
 def write_json(path: Path, data: dict[str, Any]) -> None:
-    path.write_text(json.dumps(data, indent=2, sort_keys=True) + "\n")
+    write_atomic(path, (json.dumps(data, indent=2, sort_keys=True) + "\n").encode())
 
 
 def write_csv(path: Path, data: dict[str, Any]) -> None:

@@ -154,7 +154,7 @@ def uab_thd(
     span = (sl.stop - sl.start) * dt
     n_per = int(math.floor(span * f1_hz + GRID_TOL))
     if n_per < 1:
-        raise ValueError(f"window [{t0}, {t1}) s is shorter than one fundamental period ({1 / f1_hz:.4g} s)")
+        raise ValueError(f"window [{t0:.6g}, {t1:.6g}) s is shorter than one fundamental period ({1 / f1_hz:.4g} s)")
     cells = max(2, int(round(1.0 / (f1_hz * grid_s))))
     dt_grid = 1.0 / (f1_hz * cells)
     m = n_per * cells

@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from codegen.metrics import fault_counts
+from codegen.metrics import fault_counts, tracking_lines, tracking_verdict
 from codegen.model import Model
 from codegen.results import WINDOW_HEAD, fault_warning, footnotes, versions, window_cells
 from codegen.results import clean_json as _clean
@@ -173,6 +173,7 @@ def run_three_level(model: Model, strategies: list[str], plots: Path | None = No
         check_trace_memory(m, TRACE)
     results: dict[str, dict[str, Any]] = {}
     warnings: list[str] = []
+    failed: dict[str, list[str]] = {}
     with trace_writer(traces, TRACE) as writer:
         for s in strategies:
             results[s] = {}
@@ -185,6 +186,9 @@ def run_three_level(model: Model, strategies: list[str], plots: Path | None = No
                     met["wall_s"] = wall
                     met["periods_per_s"] = trace.n / wall if wall > 0 else 0.0
                 met = entries[key]
+                met.update(tracking_verdict(trace, m))
+                if met["tracking_reasons"]:
+                    failed[f"{s}/{key}"] = met["tracking_reasons"]
                 if plots is not None:
                     from codegen.topologies.ttype.plots import plot_three_level
 
@@ -213,8 +217,12 @@ def run_three_level(model: Model, strategies: list[str], plots: Path | None = No
                 f"{model.controller.dt_s * 1e6:g} us (RMSE, f_ave, Cal over the whole run; THD over the last "
                 f"{sc.window_s:g} s window with nonzero speed, its steady state checked; jump = largest "
                 "line-voltage jump in Udc/2)\n" + config_table(results, strategies))
+    text += "\n" + "\n".join(tracking_lines(failed))
+    warnings += [line.replace("tracking FAILED: ", "tracking failed: ", 1) for line in tracking_lines(failed)
+                 if failed]
     return _clean({"config": model.name, "config_hash": model.config_hash(), "versions": versions(),
-                   "scenario_set": sc.set, "strategies": results, "_table": text, "_warnings": warnings})
+                   "scenario_set": sc.set, "strategies": results, "tracking_failed": sorted(failed),
+                   "_table": text, "_warnings": warnings})
 
 
 def _plot_speed(m: Model) -> float:

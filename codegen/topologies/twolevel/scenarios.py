@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from codegen.metrics import tracking_lines, tracking_verdict
 from codegen.model import Model
 from codegen.results import WINDOW_HEAD, fault_warning, footnotes, versions, window_cells
 from codegen.results import clean_json as _clean
@@ -67,6 +68,7 @@ def run_scenarios(model: Model, strategies: list[str], plots: Path | None = None
     check_trace_memory(model, TRACE)
     results: dict[str, dict[str, Any]] = {}
     warnings: list[str] = []
+    failed: dict[str, list[str]] = {}
     with trace_writer(traces, TRACE) as writer:
         for s in strategies:
             variant = model.with_controller(strategy=s)
@@ -85,16 +87,21 @@ def run_scenarios(model: Model, strategies: list[str], plots: Path | None = None
             warning = fault_warning(s, m["periods"], m)
             if warning:
                 warnings.append(warning)
+            m.update(tracking_verdict(trace, variant))
+            if m["tracking_reasons"]:
+                failed[s] = m["tracking_reasons"]
             results[s] = m
     text = (f"{model.name}: {model.scenario.duration_s:g} s scenario, dt {model.controller.dt_s * 1e6:g} us "
             f"(MPTC paper Table 9 layout; RMSE, f_ave, Cal_ave over the whole run, THD over the last "
             f"{model.scenario.window_s:g} s window with nonzero speed, its steady state checked)\n"
-            + table9(results))
+            + table9(results) + "\n" + "\n".join(tracking_lines(failed)))
+    warnings += [line.replace("tracking FAILED: ", "tracking failed: ", 1) for line in tracking_lines(failed)
+                 if failed]
     return _clean({
         "config": model.name, "config_hash": model.config_hash(), "versions": versions(),
         "scenario": {"duration_s": model.scenario.duration_s, "speed_ref_rpm": model.scenario.speed_ref_rpm,
                      "load_nm": model.scenario.load_nm, "window_s": model.scenario.window_s},
-        "strategies": results, "_table": text, "_warnings": warnings,
+        "strategies": results, "tracking_failed": sorted(failed), "_table": text, "_warnings": warnings,
     })
 
 

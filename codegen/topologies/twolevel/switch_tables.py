@@ -21,14 +21,13 @@ cached per training configuration in ``MPCGEN_CACHE``.
 """
 from __future__ import annotations
 
-import json
-import os
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from codegen.cache import LAYOUT, cache_root, read_json, write_json
 from codegen.errors import MISSING, ConfigError
 from codegen.kernels.consts import Constants
 from codegen.kernels.sector import sector12
@@ -76,22 +75,17 @@ def utilisation_counts(model: Model, progress: Progress | None = None) -> dict[s
 
 
 def _cache_file(model: Model) -> Path:
-    from codegen.hostbuild import cache_root
-
-    return cache_root() / f"training_{training_model(model).config_hash()}.json"
+    return cache_root() / f"training_{training_model(model).config_hash()}_{LAYOUT}.json"
 
 
 def trained_counts(model: Model, progress: Progress | None = None) -> dict[str, np.ndarray]:
     """The training run's counts for ``model``: from the cache, else from a run (then cached)."""
-    cache = _cache_file(model)
-    if cache.exists():
-        raw = json.loads(cache.read_text())
+    entry = _cache_file(model)
+    raw = read_json(entry)  # None: not cached, or damaged (warned, rebuilt)
+    if isinstance(raw, dict) and set(raw) == set(tables_file.KINDS):
         return {k: np.array(v, dtype=np.int64) for k, v in raw.items()}
     counts = utilisation_counts(model, progress)
-    cache.parent.mkdir(parents=True, exist_ok=True)
-    tmp = cache.with_name(f"{cache.name}.{os.getpid()}.tmp")  # a concurrent reader never sees half a file
-    tmp.write_text(json.dumps({k: v.tolist() for k, v in counts.items()}))
-    tmp.replace(cache)
+    write_json(entry, {k: v.tolist() for k, v in counts.items()})  # atomic, with its SHA-256
     return counts
 
 

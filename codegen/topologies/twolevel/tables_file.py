@@ -28,6 +28,7 @@ from codegen import __version__
 from codegen.config import resolve_path
 from codegen.errors import ConfigError
 from codegen.model import Model, Plant
+from codegen.outputs import write_atomic
 from codegen.topologies.twolevel.derive import SwitchTable
 from codegen.topologies.twolevel.utilisation import derive_table, published_tables
 
@@ -94,8 +95,7 @@ def write_tables_file(path: Path, train: Model, counts: dict[str, np.ndarray], t
         "thin_cells": {k: [[int(a), int(b)] for a, b in np.argwhere(v)] for k, v in thin.items()},
         "tables": {k: _as_lists(t) for k, t in tables.items()},
     }
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(data, indent=1) + "\n")
+    write_atomic(path, (json.dumps(data, indent=1) + "\n").encode())
     return data
 
 
