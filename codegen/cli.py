@@ -1,4 +1,4 @@
-"""``mpcgen`` command line: generate, verify, simulate, tables, bench, firmware, sweep, report, and the
+"""``mpcgen`` command line: generate, verify, simulate, tables, bench, firmware, sweep, report, evidence, and the
 commands other packages register (``hil``).
 
 Every command is a :class:`Command`: its name, one-line help, a function adding its options and the
@@ -27,6 +27,7 @@ from typing import Any
 from codegen import __version__, cliargs
 from codegen.errors import ConfigError, MpcgenError, UsageError
 from codegen.model import TARGETS, Model
+from codegen.outputs import write_atomic
 from codegen.results import write_csv_rows
 from codegen.stages.training import with_trained_tables
 from codegen.topology import topology_of
@@ -71,15 +72,27 @@ def progress_log(quiet: bool) -> Log:
 
 def add_config_args(p: argparse.ArgumentParser, target: bool = False) -> None:
     """The config file and its overrides (``--strategy``, ``--set SECTION.FIELD=VALUE``, ...), and ``-q``."""
+    from codegen.config import owners, schema_for, strategies_of
+    from codegen.numfmt import CONFIG_FORMATS
+    from codegen.registry import topology_names
+
+    def choices(path: str) -> str:  # "a, b (topology); c (other topology)" from each topology's schema
+        return "; ".join(f"{', '.join(map(str, schema_for(t)[path].choices))} ({t})" for t in owners(path))
+
     p.add_argument("config", help="configuration file (TOML)")
-    p.add_argument("--strategy", help="override controller.strategy")
-    p.add_argument("--predictor", help="override controller.predictor (flux-geometry, dq-euler)")
-    p.add_argument("--tables", help="override controller.tables (derived, published)")
+    p.add_argument("--strategy", help="override controller.strategy: " + "; ".join(
+        f"{', '.join(strategies_of(t))} ({t})" for t in topology_names()))
+    p.add_argument("--predictor", help=f"override controller.predictor: {choices('controller.predictor')}")
+    p.add_argument("--tables", help=f"override controller.tables: {choices('controller.tables')}")
     p.add_argument("--number-format", dest="number_format",
-                   help="override controller.number_format (float32, fixed)")
+                   help=f"override controller.number_format ({', '.join(CONFIG_FORMATS)})")
     dc = p.add_mutually_exclusive_group()
-    dc.add_argument("--delay-compensation", dest="delay", action="store_const", const=True, help="predict k+2 (one-step delay compensation)")
-    dc.add_argument("--no-delay-compensation", dest="delay", action="store_const", const=False)
+    dc.add_argument("--delay-compensation", dest="delay", action="store_const", const=True,
+                    help="controller.delay_compensation = true: predict k+1 under the applied decision, choose "
+                         "for k+2 (every topology)")
+    dc.add_argument("--no-delay-compensation", dest="delay", action="store_const", const=False,
+                    help="controller.delay_compensation = false: choose for k+1 (where the topology allows it: "
+                         f"{', '.join(t for t in topology_names() if schema_for(t)['controller.delay_compensation'].choices != (True,))})")
     if target:
         p.add_argument("--target", help="override target.name (host, stm32h743, tms320f28377), "
                                         "or 'all': one folder per target under -o")
@@ -117,13 +130,12 @@ def _strategies(args: argparse.Namespace, model: Model) -> list[str]:
 def write_json(path: str | Path | None, data: dict[str, Any]) -> None:
     """Write ``data`` as indented JSON with sorted keys (folders created); nothing when ``path`` is None."""
     if path:
-        Path(path).parent.mkdir(parents=True, exist_ok=True)
-        Path(path).write_text(json.dumps(data, indent=2, sort_keys=True) + "\n")
+        write_atomic(Path(path), (json.dumps(data, indent=2, sort_keys=True) + "\n").encode())
 
 
 # ---------------------------------------------------------------- generate
 def cmd_generate(args: argparse.Namespace) -> int:
-    from codegen.stages.generate import generate, target_independent_files
+    from codegen.stages.generate import generate, quantisation_analysis
 
     every = args.target == "all"
     if every:
@@ -131,9 +143,9 @@ def cmd_generate(args: argparse.Namespace) -> int:
     model = load_model(args)
     out = cliargs.output_dir("-o", args.output)
     log = progress_log(args.quiet)
-    if every:  # one folder per target, same tables; the target-independent files computed once
-        extra = target_independent_files(model, log)
-        paths = [p for t in TARGETS for p in generate(model.replace(target=t), out / t, log=log, extra=extra)]
+    if every:  # one folder per target, same tables; the target-independent analysis computed once
+        analysis = quantisation_analysis(model, log)
+        paths = [p for t in TARGETS for p in generate(model.replace(target=t), out / t, log=log, analysis=analysis)]
     else:
         paths = generate(model, out, log=log)
     for p in paths:
@@ -143,6 +155,7 @@ def cmd_generate(args: argparse.Namespace) -> int:
 
 # ---------------------------------------------------------------- verify
 def cmd_verify(args: argparse.Namespace) -> int:
+    from codegen.manifest import C_HASH_DEFINITION
     from codegen.stages.verify import verify_strategy
 
     model = load_model(args)
@@ -160,10 +173,14 @@ def cmd_verify(args: argparse.Namespace) -> int:
         print(f"{s:12s} states {r.states:>9d}  mismatches {r.mismatches}  ({r.states_per_s:,.0f} states/s, "
               f"closed-loop {r.sources.get('closed_loop', 0)}, adversarial {r.sources['adversarial']}, "
               f"random {r.sources['random']}, guard trips {r.faulted_states})")
+        compiled = "" if r.compiled_c_hash == r.c_hash else \
+            f"; compiled and compared: the {r.compiled_target} C, C hash {r.compiled_c_hash}"
+        print(f"{'':12s} C hash {r.c_hash} (the C generated for {r.c_hash_target}{compiled})")
         if r.mismatches:
             print(r.first_mismatch)
     write_json(args.json, {
         "config": model.name, "config_hash": model.config_hash(), "version": __version__,
+        "target": model.target, "c_hash_definition": C_HASH_DEFINITION,
         "strategies": {r.strategy: r.as_dict() for r in results},
     })
     return EXIT_OK if all(r.mismatches == 0 for r in results) else EXIT_FAIL
@@ -198,7 +215,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     for warning in data.pop("_warnings", []):
         print(f"mpcgen: warning: {warning}", file=sys.stderr)
     write_json(args.json, data)
-    return EXIT_OK
+    return EXIT_FAIL if args.strict and data.get("tracking_failed") else EXIT_OK
 
 
 # ---------------------------------------------------------------- tables
@@ -260,8 +277,9 @@ def cmd_firmware(args: argparse.Namespace) -> int:
 def cmd_report(args: argparse.Namespace) -> int:
     import tempfile
 
+    from codegen.manifest import C_HASH_DEFINITION
     from codegen.stages.quantisation import analyse, fixed_twin
-    from codegen.stages.quantreport import markdown, plots, report_name
+    from codegen.stages.quantreport import c_hashes, markdown, plots, report_name
 
     model = load_model(args)
     cliargs.at_least("--states", args.states, 1)
@@ -279,7 +297,8 @@ def cmd_report(args: argparse.Namespace) -> int:
         traces = Path(tmp) if out is not None else None
         data = analyse(model, strategies, random_states=args.states, log=log, traces=traces)
         files = plots(model, data, traces, out) if out is not None else None
-    text = markdown(model, data, files)
+    hashes = c_hashes(model, strategies)
+    text = markdown(model, data, hashes, files)
     if out is not None:
         (out / report_name(model)).write_text(text)
         print(out / report_name(model))
@@ -288,7 +307,9 @@ def cmd_report(args: argparse.Namespace) -> int:
                 print(out / name)
     else:
         print(text, end="")
-    write_json(args.json, data)
+    write_json(args.json, {**data, "target": model.target, "c_hash_definition": C_HASH_DEFINITION,
+                           "strategies": {s: {**d, "c_hash_target": model.target, "c_hash": hashes[s]}
+                                          for s, d in data["strategies"].items()}})
     return EXIT_OK
 
 
@@ -314,7 +335,7 @@ def _generate_args(g: argparse.ArgumentParser) -> None:
 
 def _verify_args(v: argparse.ArgumentParser) -> None:
     add_config_args(v)
-    v.add_argument("--states", type=int, default=1_000_000, help="states per strategy (default 1000000)")
+    v.add_argument("--states", type=cliargs.count, default=1_000_000, help="states per strategy (default 1e6)")
     v.add_argument("--strategies", help="comma list (default: every strategy of the topology)")
     v.add_argument("--no-closed-loop", action="store_true", help="skip the recorded closed-loop states")
     v.add_argument("--json", help="write results as JSON")
@@ -331,6 +352,10 @@ def _simulate_args(s: argparse.ArgumentParser) -> None:
                    help="print the paper's published figures next to ours, with the ratios the paper draws")
     s.add_argument("--sweep-eps", metavar="START:STOP:STEP",
                    help="threshold sweep of the MPTC paper's Tables 1-2 with strategy s1 (e.g. 0.1:1.5:0.1)")
+    s.add_argument("--strict", action="store_true",
+                   help="exit 1 when a run's tracking verdict is 'failed' (speed off its reference at the end of "
+                        "a segment, torque held at the speed loop's limit, or a guard trip); the results are "
+                        "written either way")
 
 
 def _tables_args(t: argparse.ArgumentParser) -> None:
@@ -382,7 +407,7 @@ def _sweep_args(w: argparse.ArgumentParser) -> None:
 def _report_args(r: argparse.ArgumentParser) -> None:
     add_config_args(r)
     r.add_argument("--strategies", help="comma list (default: all of the topology)")
-    r.add_argument("--states", type=int, default=20_000, help="random states per strategy (default 20000)")
+    r.add_argument("--states", type=cliargs.count, default=20_000, help="random states per strategy (default 20000)")
     r.add_argument("-o", "--output", help="directory for <prefix>_quantisation.md and the PNG plots "
                                           "(default: the markdown on stdout)")
     r.add_argument("--json", help="write the analysis as JSON")
@@ -399,6 +424,9 @@ COMMANDS: tuple[Command, ...] = (
     Command("sweep", "parameter grids and Monte Carlo mismatch studies of simulate, on Dask", _sweep_args, cmd_sweep),
     Command("report", "quantisation report of the fixed-point controller (formats, errors, agreement with "
                       "float32, closed loop)", _report_args, cmd_report),
+    # defined at the end of this module: looked up when called
+    Command("evidence", "one self-contained HTML page of a run's verify, simulate, report, bench and hil outputs",
+            lambda p: _evidence_args(p), lambda a: cmd_evidence(a)),
 )
 
 
@@ -430,11 +458,13 @@ def registered_commands() -> list[Command]:
 
 def build_parser(commands: Sequence[Command] | None = None) -> argparse.ArgumentParser:
     """The ``mpcgen`` parser with ``commands`` (default: codegen's and the registered ones)."""
-    p = argparse.ArgumentParser(prog="mpcgen", description="FCS-MPC code generator for PMSM drives: generate, verify bit for bit, simulate, benchmark.")
+    p = argparse.ArgumentParser(prog="mpcgen", allow_abbrev=False,  # --plot must not silently mean --plots
+                                description="FCS-MPC code generator for PMSM drives: generate, verify bit for bit, "
+                                            "simulate, benchmark.")
     p.add_argument("--version", action="version", version=f"mpcgen {__version__}")
     sub = p.add_subparsers(dest="command", required=True)
     for command in (*COMMANDS, *registered_commands()) if commands is None else commands:
-        c = sub.add_parser(command.name, help=command.help)
+        c = sub.add_parser(command.name, help=command.help, allow_abbrev=False)
         command.arguments(c)
         c.set_defaults(func=command.run)
     return p
@@ -462,6 +492,79 @@ def run(parser: argparse.ArgumentParser, argv: Sequence[str] | None = None) -> i
 def main(argv: Sequence[str] | None = None) -> int:
     """``mpcgen`` (the console script): codegen's commands and the registered ones."""
     return run(build_parser(), argv)
+
+
+# ---------------------------------------------------------------- evidence
+def _evidence_args(e: argparse.ArgumentParser) -> None:
+    add_config_args(e)
+    e.add_argument("--verify", action="append", default=[], metavar="FILE",
+                   help="mpcgen verify --json output (repeatable: one per number format)")
+    e.add_argument("--simulate", metavar="FILE", help="mpcgen simulate --json output")
+    e.add_argument("--plots", metavar="DIR", help="mpcgen simulate --plots folder: every PNG shown inline")
+    e.add_argument("--report", metavar="DIR_OR_MD", help="mpcgen report -o folder, or its <prefix>_quantisation.md")
+    e.add_argument("--bench", metavar="FILE", help="mpcgen bench --json output")
+    e.add_argument("--hil", action="append", default=[], metavar="FILE", help="mpcgen hil --json output (repeatable)")
+    e.add_argument("--manifest", action="append", default=[], metavar="FILE",
+                   help="the <prefix>_manifest.json mpcgen generate writes (repeatable)")
+    e.add_argument("--allow-mixed", action="store_true",
+                   help="include inputs naming another config hash (flagged red) instead of refusing them")
+    e.add_argument("-o", "--output", required=True, metavar="FILE", help="the HTML page to write")
+
+
+def _given_overrides(args: argparse.Namespace) -> tuple[str, ...]:
+    """The overrides on the command line as ``section.field=value``, in load order."""
+    flags = (("strategy", "controller.strategy"), ("predictor", "controller.predictor"),
+             ("tables", "controller.tables"), ("number_format", "controller.number_format"),
+             ("delay", "controller.delay_compensation"))
+    given = [f"{key}={getattr(args, attr)}" for attr, key in flags if getattr(args, attr, None) is not None]
+    return (*args.sets, *given)
+
+
+def _evidence_identities(model: Model, named: set[str], log: Log) -> dict[str, Any]:
+    """The config hashes that are ``model``'s: its own, its fixed-point twin's (what ``report`` analyses)
+    and, only when an input names a hash not yet known, each of those with the tables trained on its
+    scenario (what ``verify``, ``simulate``, ``bench`` ... run)."""
+    from codegen.evidence import Identity
+    from codegen.stages.quantisation import fixed_twin
+
+    twin = fixed_twin(model)
+    variants = [("config", model)]
+    if twin is not model:
+        variants.append((f"{twin.controller.number_format} twin, as report analyses it", twin))
+    ids: dict[str, Any] = {}
+    for label, m in variants:
+        ids.setdefault(m.config_hash(), Identity(label, m.controller.number_format))
+    for label, m in variants:
+        if named <= ids.keys():
+            break
+        trained = with_trained_tables(m, topology_of(m).strategies, log)
+        ids.setdefault(trained.config_hash(), Identity(f"{label}, with trained tables", m.controller.number_format))
+    return ids
+
+
+def cmd_evidence(args: argparse.Namespace) -> int:
+    import hashlib
+
+    from codegen import evidence
+
+    model = load_model(args)
+    out = cliargs.output_file("-o", args.output)
+    assert out is not None
+    log = progress_log(args.quiet)
+    inputs = evidence.collect(verify=args.verify, simulate=args.simulate, plots=args.plots, report=args.report,
+                              bench=args.bench, hil=args.hil, manifest=args.manifest)
+    identities = _evidence_identities(model, evidence.named_config_hashes(inputs), log)
+    if not args.allow_mixed:
+        evidence.check_belongs(inputs.all(), identities, args.config)
+    facts = evidence.ConfigFacts(
+        path=args.config, sha256=hashlib.sha256(Path(args.config).read_bytes()).hexdigest(), name=model.name,
+        config_hash=model.config_hash(), topology=topology_of(model).name, strategy=model.controller.strategy,
+        number_format=model.controller.number_format, target=model.target, version=__version__,
+        overrides=_given_overrides(args))
+    out.write_text(evidence.page(facts, inputs, identities), encoding="utf-8")
+    log(f"evidence: {len(inputs.all()) + len(inputs.plots)} inputs -> {out}")
+    print(out)
+    return EXIT_OK
 
 
 if __name__ == "__main__":  # run as codegen.cli, so that registered commands see this module's Command

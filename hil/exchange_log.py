@@ -1,50 +1,183 @@
-"""A log of every exchange with a board, and its offline re-verification (``mpcgen hil --check-log``).
+"""A log of every exchange with a board (``mpcgen hil --log``): the writer.
 
-:class:`LoggingLink` wraps any :class:`~hil.link.Link` and writes one JSON line per chunk of octets
-that crosses it (direction, time since the start, hex octets), after a header line naming the
-config file, the overrides, the config and schema hashes, the strategy and the board.
-:func:`check_log` decodes both directions offline, pairs every RESULT with the state its
-STEP/BATCH carried under the same sequence number (in the order they crossed the wire, so a
-resend under a new number or a reset is followed), recomputes the Python reference for those
-states and compares every output bit for bit: a board's answers can be re-verified later, or
-on another machine, from the log alone plus the config.
+The log is JSON lines (format :data:`FORMAT`):
+
+* line 1, the header: ``{"format": FORMAT, config, sets, config and schema hashes, strategy, board, mode}``;
+* one line per chunk of octets that crossed the link: ``{"t": s since the start, "dir": "out"|"in",
+  "hex": octets}``;
+* the last line, the end record, written when the run finishes: ``{"end": true, "completed": bool,
+  "error": why not (or null), "run": the run's own counts, "counts": octets, lines, frames and discarded
+  frames per direction, and frames per message type}``.
+
+Every line ends with ``"sha256": D``: the SHA-256 of the log up to and including that line (the line
+without this field), so each line carries the digest of everything before it, and the end record's
+``sha256`` is that of the whole log.  A hand edit anywhere breaks the chain at the edited line (the
+chain proves against edits, not against a forger who recomputes it: the whole log's digest, which
+:meth:`LoggingLink.finish` returns, can be kept apart).
+
+The harness ends the log with :meth:`LoggingLink.finish` (the mode's summary) or
+:func:`finish_log`; used as a context manager, an exception or an exit without it writes the end record
+of a run that did not complete.  :mod:`hil.log_check` reads and re-verifies a log.
 """
 from __future__ import annotations
 
+import hashlib
 import json
+import re
 import time
-from pathlib import Path
+from collections import Counter
+from collections.abc import Mapping
+from types import TracebackType
 from typing import Any, TextIO
 
 import numpy as np
 
-from codegen.compare import mismatch_mask
-from codegen.model import Model
-from codegen.topology import topology_of
-
-from .framing import Frame, FrameDecoder
+from .framing import Discarded, Frame, FrameDecoder
 from .link import Link
-from .messages import split_results
-from .schema import Msg, Schema
+from .schema import Msg
 
-__all__ = ["FORMAT", "LoggingLink", "check_log"]
+__all__ = ["FORMAT", "FORMAT_NAME", "DIGEST_KEY", "DigestChain", "Tally", "LoggingLink", "finish_log", "run_completed",
+           "type_name"]
 
-#: first line of every log: {"format": FORMAT, ...}
-FORMAT = "mpcgen-hil-log/1"
+#: first line of every log: {"format": FORMAT, ...}; bump on any change of the format
+FORMAT = "mpcgen-hil-log/2"
+#: every version of the format starts so
+FORMAT_NAME = "mpcgen-hil-log/"
+#: key of every line's digest (the last key of the line)
+DIGEST_KEY = "sha256"
+_SEALED = re.compile(rb', "sha256": "([0-9a-f]{64})"\}$')
+
+
+class DigestChain:
+    """The running SHA-256 of a log: each line carries the digest of the log up to and including itself."""
+
+    def __init__(self) -> None:
+        self._h = hashlib.sha256()
+
+    def _peek(self, text: bytes) -> str:
+        h = self._h.copy()
+        h.update(text)
+        return h.hexdigest()
+
+    def seal(self, record: Mapping[str, Any]) -> str:
+        """The line (newline included) of ``record`` with its digest; the line joins the chain."""
+        text = json.dumps(record)
+        line = f'{text[:-1]}, "{DIGEST_KEY}": "{self._peek(text.encode())}"}}\n'
+        self._h.update(line.encode())
+        return line
+
+    def check(self, line: bytes) -> bool:
+        """Whether ``line`` (without its newline) carries the right digest; the line joins the chain either way."""
+        m = _SEALED.search(line)
+        ok = m is not None and self._peek(line[:m.start()] + b"}") == m.group(1).decode()
+        self._h.update(line + b"\n")
+        return ok
+
+    @property
+    def digest(self) -> str:
+        """SHA-256 (hex) of every line so far."""
+        return self._h.hexdigest()
+
+
+class Tally:
+    """Lines, octets, frames and discarded frames per direction, and frames per message type."""
+
+    def __init__(self) -> None:
+        self.decoders = {"out": FrameDecoder(), "in": FrameDecoder()}
+        self.by_dir: dict[str, Counter[str]] = {"out": Counter(), "in": Counter()}
+
+    def feed(self, direction: str, data: bytes) -> list[Frame | Discarded]:
+        """Count one chunk; the frames (and discarded chunks) it completes."""
+        items = self.decoders[direction].feed(data)
+        c = self.by_dir[direction]
+        c["lines"] += 1
+        c["octets"] += len(data)
+        for item in items:
+            if isinstance(item, Frame):
+                c["frames"] += 1
+                c[type_name(item.type)] += 1
+            else:
+                c["discarded"] += 1
+        return items
+
+    def counts(self) -> dict[str, dict[str, int]]:
+        return {d: dict(sorted(c.items())) for d, c in self.by_dir.items()}
+
+
+def type_name(msg_type: int) -> str:
+    """The message type's name (``TYPE<n>`` for a number no message has)."""
+    try:
+        return Msg(msg_type).name
+    except ValueError:
+        return f"TYPE{msg_type}"
+
+
+# ---------------------------------------------------------------- writing
+#: the run's own counts copied into the end record (those of its summary that it has)
+RUN_KEYS = ("mode", "states", "answered", "unanswered", "lost", "mismatches", "periods", "periods_done", "lost_at",
+            "complete", "ok", "failure", "parts", "resumed_from")
+
+
+def run_completed(summary: Mapping[str, Any]) -> bool:
+    """Whether a mode's summary says the run did all it was to do (not whether its results are right)."""
+    if "complete" in summary:  # onboard
+        return bool(summary["complete"])
+    if "periods_done" in summary:  # closed-loop
+        return bool(summary["periods_done"] == summary["periods"] and summary.get("lost_at") is None)
+    if "states" in summary:  # replay
+        return bool(summary.get("answered") == summary["states"] and not summary.get("lost"))
+    return False
+
+
+def _plain(v: Any) -> Any:
+    """A JSON value of a summary's scalar (numpy scalars as Python ones)."""
+    return v.item() if isinstance(v, np.generic) else v
 
 
 class LoggingLink:
-    """A :class:`~hil.link.Link` that logs every octet written and read to ``out``."""
+    """A :class:`~hil.link.Link` that logs every octet written and read to ``out``.
+
+    Call :meth:`finish` with the run's summary when the run ends (or use it as a context manager: an
+    exception, or an exit without :meth:`finish`, writes the end record of a run that did not complete).
+    """
 
     def __init__(self, link: Link, out: TextIO, header: dict[str, Any]) -> None:
         self.link, self.out = link, out
         self.t0 = time.perf_counter()
-        out.write(json.dumps({"format": FORMAT, **header}) + "\n")
+        self.chain = DigestChain()
+        self.tally = Tally()
+        self.finished = False
+        self._write({"format": FORMAT, **header})
+
+    def _write(self, record: Mapping[str, Any]) -> None:
+        self.out.write(self.chain.seal(record))
 
     def _log(self, direction: str, data: bytes) -> None:
-        if data:
-            self.out.write(json.dumps({"t": round(time.perf_counter() - self.t0, 6), "dir": direction,
-                                       "hex": data.hex()}) + "\n")
+        if data and not self.finished:
+            self.tally.feed(direction, data)
+            self._write({"t": round(time.perf_counter() - self.t0, 6), "dir": direction, "hex": data.hex()})
+
+    def finish(self, summary: Mapping[str, Any] | None = None, *, error: str | None = None) -> str:
+        """Write the end record (once): the run's counts from ``summary``, completed unless ``error`` or
+        the summary says otherwise; the SHA-256 of the whole log."""
+        if not self.finished:
+            run = {k: _plain(summary[k]) for k in RUN_KEYS if summary is not None and k in summary}
+            done = error is None and summary is not None and run_completed(summary)
+            if error is None and not done:
+                error = ("no summary of the run" if summary is None else
+                         str(summary.get("failure") or "the run did not do all it was to do"))
+            self._write({"end": True, "completed": done, "error": error, "run": run, "counts": self.tally.counts()})
+            self.out.flush()
+            self.finished = True
+        return self.chain.digest
+
+    def __enter__(self) -> LoggingLink:
+        return self
+
+    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
+                 tb: TracebackType | None) -> None:
+        self.finish(error=f"{exc_type.__name__}: {exc}" if exc_type is not None
+                    else "the run ended without reporting its end")
 
     @property
     def octets_out(self) -> int:
@@ -71,68 +204,6 @@ class LoggingLink:
         self.link.close()
 
 
-def read_log(path: Path) -> tuple[dict[str, Any], list[tuple[str, bytes]]]:
-    """The header and the (direction, octets) chunks of a log; ValueError if it is not one."""
-    lines = path.read_text().splitlines()
-    if not lines:
-        raise ValueError("empty file")
-    header = json.loads(lines[0])
-    if not isinstance(header, dict) or header.get("format") != FORMAT:
-        raise ValueError(f"not a log of format {FORMAT}")
-    chunks = []
-    for i, line in enumerate(lines[1:], start=2):
-        rec = json.loads(line)
-        if rec.get("dir") not in ("out", "in"):
-            raise ValueError(f"line {i}: no direction")
-        chunks.append((rec["dir"], bytes.fromhex(rec["hex"])))
-    return header, chunks
-
-
-def check_log(model: Model, tables: Any, path: Path) -> dict[str, Any]:
-    """Re-verify a logged run: every RESULT in the log against the reference for its state."""
-    header, chunks = read_log(path)
-    schema = Schema.of(model)
-    if header.get("config_hash") != schema.config_hash or header.get("schema_hash") != schema.schema_hash:
-        raise ValueError(f"the log is of config {header.get('config_hash')} and schema {header.get('schema_hash')}, "
-                         f"this config gives {schema.config_hash} and {schema.schema_hash}")
-    dec = {"out": FrameDecoder(), "in": FrameDecoder()}
-    in_w, out_w = schema.input_octets, schema.result_octets
-    k = schema.batch_head.packed_dtype.itemsize
-    state_of: dict[int, bytes] = {}  # sequence number -> packed input record, latest request wins
-    pairs: list[tuple[bytes, bytes]] = []
-    unmatched = 0
-    # what the log holds that no result can be checked against: reported, never skipped silently
-    faults = {"discarded_frames_out": 0, "discarded_frames_in": 0, "bad_batches": 0, "bad_results": 0}
-    for direction, data in chunks:
-        for item in dec[direction].feed(data):
-            if not isinstance(item, Frame):
-                faults[f"discarded_frames_{direction}"] += 1
-                continue
-            if direction == "out" and item.type == Msg.STEP:
-                state_of[item.seq] = item.payload
-            elif direction == "out" and item.type == Msg.BATCH:
-                body = item.payload[k:]
-                count = schema.batch_head.unpack(item.payload[:k])["count"][0] if len(item.payload) >= k else -1
-                if len(body) % in_w or len(body) // in_w != count:
-                    faults["bad_batches"] += 1  # its states are not taken: no result is paired with them
-                    continue
-                for i in range(len(body) // in_w):
-                    state_of[(item.seq + i) & 0xFFFF] = body[i * in_w:(i + 1) * in_w]
-            elif direction == "in" and item.type == Msg.RESULT and len(item.payload) != out_w:
-                faults["bad_results"] += 1
-            elif direction == "in" and item.type == Msg.RESULT:
-                st = state_of.get(item.seq)
-                if st is None:
-                    unmatched += 1
-                else:
-                    pairs.append((st, item.payload))
-    if not pairs:
-        return {"log": str(path), "results": 0, "mismatches": 0, "unmatched_results": unmatched, **faults}
-    states = schema.input.unpack(b"".join(p[0] for p in pairs), len(pairs))
-    payloads = np.frombuffer(b"".join(p[1] for p in pairs), np.uint8).reshape(len(pairs), out_w)
-    _, got = split_results(schema, payloads)
-    ref = topology_of(model).step_batch(tables, states)
-    bad, per_field = mismatch_mask(ref, got)
-    return {"log": str(path), "board": header.get("board"), "results": len(pairs),
-            "distinct_states": len({p[0] for p in pairs}), "mismatches": int(bad.sum()),
-            "mismatch_fields": per_field, "unmatched_results": unmatched, **faults}
+def finish_log(link: object, summary: Mapping[str, Any]) -> str | None:
+    """End ``link``'s log with ``summary`` if it is a :class:`LoggingLink`; its digest (None: no log)."""
+    return link.finish(summary) if isinstance(link, LoggingLink) else None

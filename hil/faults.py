@@ -8,6 +8,8 @@ traffic to the board (``"out"``) or from it (``"in"``):
 * ``truncate``: the frame cut to half its length (delimiter kept);
 * ``drop``: the frame removed;
 * ``duplicate``: the frame sent twice;
+* ``reorder``: the frame held back and passed on after the next frame of its
+  direction (two frames swapped);
 * ``reset`` (``"out"`` only): a RESET sent to the board before the frame
   (the board restarts its protocol and announces INFO mid-run);
 * ``silent``: from this frame on nothing passes either way.
@@ -26,7 +28,7 @@ from .schema import Msg
 
 __all__ = ["Fault", "FaultLink", "KINDS"]
 
-KINDS = ("garbage", "corrupt", "truncate", "drop", "duplicate", "reset", "silent")
+KINDS = ("garbage", "corrupt", "truncate", "drop", "duplicate", "reorder", "reset", "silent")
 
 
 @dataclass(frozen=True)
@@ -58,6 +60,7 @@ class FaultLink:
         self._count = {"out": 0, "in": 0}
         self._held = b""
         self._silent = False
+        self._deferred: dict[str, list[bytes]] = {"out": [], "in": []}  # reordered frames, sent after the next
 
     @property
     def octets_out(self) -> int:
@@ -75,6 +78,7 @@ class FaultLink:
             n = self._count[direction]
             self._count[direction] += 1
             frames = [chunk]
+            defer = False
             for f in self.faults:
                 if f.direction != direction or f.frame != n:
                     continue
@@ -83,6 +87,8 @@ class FaultLink:
                     self._silent = True
                 elif f.kind == "garbage":
                     out += bytes(self._rng.randrange(256) for _ in range(self._rng.randrange(5, 40)))
+                elif not frames:  # dropped by an earlier fault on this frame: nothing left to alter
+                    continue
                 elif f.kind == "corrupt":
                     c = bytearray(frames[0])
                     k = self._rng.randrange(len(c))
@@ -94,12 +100,18 @@ class FaultLink:
                     frames = []
                 elif f.kind == "duplicate":
                     frames = frames * 2
+                elif f.kind == "reorder":
+                    defer = True
                 elif f.kind == "reset":
                     out += encode_frame(Msg.RESET, 0xFFFE)
             if self._silent:
                 return bytes(out)
-            for fr in frames:
+            if defer:
+                self._deferred[direction] += frames
+                continue
+            for fr in frames + self._deferred[direction]:
                 out += b"\x00" + fr + b"\x00"
+            self._deferred[direction] = []
         return bytes(out)
 
     def write(self, data: bytes) -> None:

@@ -61,6 +61,8 @@ def decode_frame(chunk: bytes) -> Frame | Discarded:
         return Discarded("cobs", len(chunk))
     if len(raw) < HEAD_OCTETS + CRC_OCTETS:
         return Discarded("short", len(chunk))
+    if len(raw) > MAX_FRAME:  # fits the receive buffer (COBS overhead) yet longer than a frame may be
+        return Discarded("oversize", len(chunk))
     body, (want,) = raw[:-CRC_OCTETS], _CRC.unpack(raw[-CRC_OCTETS:])
     if crc32(body) != want:
         return Discarded("crc", len(chunk))

@@ -6,11 +6,26 @@ from typing import Any
 
 import numpy as np
 
-from .schema import MAX_FRAME, MAX_STEPS, PROTOCOL_VERSION, Err, Schema, hash_words, text_words, words_hash, words_text
+from .schema import (
+    MAX_FRAME,
+    MAX_STEPS,
+    PROTOCOL_VERSION,
+    TELEMETRY_SAMPLES,
+    Err,
+    Schema,
+    hash_words,
+    text_words,
+    words_hash,
+    words_text,
+)
 
 __all__ = ["BoardInfo", "ErrorReport", "info_payload", "parse_info", "batch_payload", "step_payload",
-           "parse_error", "split_results", "ProtocolError", "setpoints_payload", "parse_telemetry",
-           "parse_run_end", "RunEnd"]
+           "error_payload", "parse_error", "split_results", "ProtocolError", "Setpoints", "setpoints_payload",
+           "parse_setpoints", "telemetry_frames", "telemetry_payload", "parse_telemetry", "run_end_payload",
+           "parse_run_end", "RunEnd", "SEQ_UNKNOWN"]
+
+#: seq of an ERROR whose frame's seq is unknown (CRC, COBS, SHORT, OVERSIZE: the head is not trusted)
+SEQ_UNKNOWN = 0xFFFF
 
 
 class ProtocolError(Exception):
@@ -83,6 +98,13 @@ def parse_info(schema: Schema, payload: bytes) -> BoardInfo:
                      words_text(list(r["number_format"])), words_text(list(r["cycle_unit"])))
 
 
+def error_payload(schema: Schema, code: int, seq: int, detail: int) -> bytes:
+    """An ERROR payload (what the firmware sends; tests and simulated boards use it)."""
+    rec = schema.error.zeros(1)
+    rec["code"], rec["seq"], rec["detail"] = code, seq & 0xFFFF, detail & 0xFFFF
+    return schema.error.pack(rec).tobytes()
+
+
 def parse_error(schema: Schema, payload: bytes) -> ErrorReport:
     """An ERROR message's record."""
     r = _one(schema, "error", payload)
@@ -109,14 +131,36 @@ def split_results(schema: Schema, payloads: np.ndarray) -> tuple[np.ndarray, np.
     return heads["cycles"].astype(np.int64), outs
 
 
-def setpoints_payload(schema: Schema, periods: int, decimation: int,
-                      steps: list[tuple[int, float, float]]) -> bytes:
+def telemetry_frames(samples: int) -> int:
+    """TELEMETRY frames of a run of ``samples`` samples (frame i holds samples i*TELEMETRY_SAMPLES ...)."""
+    return -(-samples // TELEMETRY_SAMPLES)
+
+
+@dataclass(frozen=True)
+class Setpoints:
+    """A SETPOINTS message: run ``periods`` periods, a sample every ``decimation``, the profile ``steps``
+    ((period index, mechanical speed reference rad/s, load N*m)), sending TELEMETRY frames
+    ``frame_first`` .. ``frame_first + frame_count - 1``."""
+
+    periods: int
+    decimation: int
+    steps: list[tuple[int, float, float]]
+    frame_first: int
+    frame_count: int
+
+
+def setpoints_payload(schema: Schema, periods: int, decimation: int, steps: list[tuple[int, float, float]],
+                      frame_first: int = 0, frame_count: int | None = None) -> bytes:
     """A SETPOINTS payload: run ``periods`` periods, a sample every ``decimation``; ``steps``: (period index,
-    mechanical speed reference rad/s, load N*m), the first at period 0, increasing, at most MAX_STEPS."""
+    mechanical speed reference rad/s, load N*m), the first at period 0, increasing, at most MAX_STEPS;
+    the TELEMETRY frames ``frame_first`` .. ``frame_first + frame_count - 1`` sent (default: every frame)."""
     if not 1 <= len(steps) <= MAX_STEPS:
         raise ValueError(f"{len(steps)} profile steps: the protocol takes 1 to {MAX_STEPS}")
+    if frame_count is None:
+        frame_count = telemetry_frames(-(-periods // decimation)) if periods > 0 and decimation > 0 else 0
     rec = schema.setpoints.zeros(1)
     rec["periods"], rec["decimation"], rec["n_steps"] = periods, decimation, len(steps)
+    rec["frame_first"], rec["frame_count"] = frame_first, frame_count
     k = np.zeros(MAX_STEPS, np.int64)
     w = np.zeros(MAX_STEPS)
     load = np.zeros(MAX_STEPS)
@@ -126,13 +170,33 @@ def setpoints_payload(schema: Schema, periods: int, decimation: int,
     return schema.setpoints.pack(rec).tobytes()
 
 
+def parse_setpoints(schema: Schema, payload: bytes) -> Setpoints:
+    """A SETPOINTS message's record (its steps as many as ``n_steps`` says, at most MAX_STEPS)."""
+    r = _one(schema, "setpoints", payload)
+    n = min(int(r["n_steps"]), MAX_STEPS)
+    steps = [(int(r["step_k"][i]), float(r["speed_rad_s"][i]), float(r["load_nm"][i])) for i in range(n)]
+    return Setpoints(int(r["periods"]), int(r["decimation"]), steps, int(r["frame_first"]), int(r["frame_count"]))
+
+
+def telemetry_payload(schema: Schema, samples: np.ndarray) -> bytes:
+    """A TELEMETRY payload: count, then the samples (a record array of ``schema.sample``; 1 to
+    TELEMETRY_SAMPLES of them; what the firmware sends, tests and simulated boards use it)."""
+    if not 1 <= len(samples) <= TELEMETRY_SAMPLES:
+        raise ValueError(f"{len(samples)} samples: a TELEMETRY frame holds 1 to {TELEMETRY_SAMPLES}")
+    head = schema.telemetry_head.zeros(1)
+    head["count"] = len(samples)
+    return schema.telemetry_head.pack(head).tobytes() + schema.sample.pack(samples).tobytes()
+
+
 def parse_telemetry(schema: Schema, payload: bytes) -> np.ndarray:
-    """The samples of a TELEMETRY payload (a record array of ``schema.sample``)."""
+    """The samples of a TELEMETRY payload (a record array of ``schema.sample``, 1 to TELEMETRY_SAMPLES)."""
     k = schema.telemetry_head.packed_dtype.itemsize
     w = schema.sample.packed_dtype.itemsize
     if len(payload) < k:
         raise ProtocolError(f"TELEMETRY: {len(payload)} octets")
     count = int.from_bytes(payload[:2], "little")
+    if not 1 <= count <= TELEMETRY_SAMPLES:
+        raise ProtocolError(f"TELEMETRY: {count} samples, a frame holds 1 to {TELEMETRY_SAMPLES}")
     if len(payload) != k + count * w:
         raise ProtocolError(f"TELEMETRY: {len(payload)} octets for {count} samples, expected {k + count * w}")
     return schema.sample.unpack(payload[k:], count)
@@ -151,6 +215,16 @@ class RunEnd:
     cycles_sum: int
     hist: list[int]
     hist_width: int
+
+
+def run_end_payload(schema: Schema, end: RunEnd) -> bytes:
+    """A RUN_END payload (what the firmware sends; tests and simulated boards use it)."""
+    rec = schema.run_end.zeros(1)
+    for name in ("periods", "samples", "status", "changes", "cycles_min", "cycles_max", "hist_width"):
+        rec[name] = getattr(end, name)
+    rec["cycles_sum"] = [(end.cycles_sum >> (16 * i)) & 0xFFFF for i in range(4)]
+    rec["hist"] = end.hist
+    return schema.run_end.pack(rec).tobytes()
 
 
 def parse_run_end(schema: Schema, payload: bytes) -> RunEnd:

@@ -9,9 +9,12 @@ on a free port, in its own process group; the harness connects with pyserial
 ``socket://127.0.0.1:PORT``.  QEMU waits for that connection before the
 guest runs and is always killed at the end (``emulate.kill_group``).
 
-Cycles: the protocol image counts instructions (firmware/ports/qemu-m7/board.c:
-SysTick under ``-icount shift=10``, converted on the board), so RESULT cycles
-are the instructions of the step, as ``mpcgen bench --emulated`` reports them.
+Timings: the protocol image counts instructions (firmware/ports/qemu-m7/board.c:
+SysTick under ``-icount shift=10``, converted on the board; its INFO says
+``instructions``), so the RESULT timings are the instructions of the step, as
+``mpcgen bench --emulated`` reports them: ``instructions_*`` in the summary,
+never ``cycles_*``, and no clock frequency (the port's nominal 25 MHz does not
+apply to instruction counts).
 
 Speed: the emulated UART takes one octet at a time from the socket (about
 15-20 kB/s host to guest), so the harness keeps the session's timeout long

@@ -54,7 +54,7 @@ class Msg(IntEnum):
     RESET = 8   # host -> board, empty: the protocol restarts, the board announces INFO
     ERROR = 9   # board -> host, error record
     SETPOINTS = 10   # host -> board, setpoints record: run plant and controller on board (mode onboard)
-    TELEMETRY = 11   # board -> host, telemetry head + count samples (seq: SETPOINTS seq + frame index + 1)
+    TELEMETRY = 11   # board -> host, telemetry head + count samples (seq: SETPOINTS seq + frame index + 1, mod 2^16)
     RUN_END = 12     # board -> host, end-of-run record of mode onboard (seq of the SETPOINTS)
 
 
@@ -68,7 +68,7 @@ class Err(IntEnum):
     TYPE = 5      # unknown or board-to-host message type
     LENGTH = 6    # payload length wrong for the type
     BATCH = 7     # batch count 0 or above max_batch
-    SETPOINTS = 8  # setpoints invalid (detail: 1 periods, 2 decimation, 3 step count, 4 step order)
+    SETPOINTS = 8  # setpoints invalid (detail: 1 periods, 2 decimation, 3 step count, 4 step order, 5 frame window)
 
 
 #: header records (one definition; the C structs and codec are generated from them)
@@ -103,6 +103,9 @@ ERROR = Record("hil_error", fields("""
 MAX_STEPS = 8
 #: most samples of one TELEMETRY frame
 TELEMETRY_SAMPLES = 16
+#: An on-board run is deterministic (the same setpoints give the same samples and RUN_END, bar the cycle
+#: counts): the harness asks for lost TELEMETRY frames again by sending the same setpoints with another
+#: frame window (frame_first, frame_count), and checks that the second RUN_END equals the first.
 SETPOINTS = Record("hil_setpoints", fields(f"""
     periods     i32  1  control periods to run (>= 1)
     decimation  u16  1  one telemetry sample every `decimation` periods (>= 1)
@@ -110,6 +113,8 @@ SETPOINTS = Record("hil_setpoints", fields(f"""
     step_k      i32  {MAX_STEPS}  period index where the step starts
     speed_rad_s f32  {MAX_STEPS}  mechanical speed reference from that period, rad/s
     load_nm     f32  {MAX_STEPS}  load torque from that period, N*m
+    frame_first i32  1  first TELEMETRY frame sent (>= 0); frame i holds samples i*{TELEMETRY_SAMPLES} ..
+    frame_count i32  1  TELEMETRY frames sent from frame_first (>= 0; 0: RUN_END only); the run is the same
 """))
 TELEMETRY_HEAD = Record("hil_telemetry_head", fields("""
     count  u16  1  number of samples that follow

@@ -18,7 +18,15 @@ one RESULT per state:
 * an INFO mid-run is a board reset: the hashes are checked again and every
   unanswered frame is sent again;
 * no valid frame for ``silence_s`` while frames are outstanding: the board
-  is silent, every unanswered state is lost and the run ends.
+  is silent, every unanswered state is lost and the run ends;
+* a RESULT taken after one of a state sent later is counted as reordered
+  (it is still taken: its CRC and sequence number are valid).
+
+The link itself failing (:class:`hil.link.LinkError`: hang-up, EIO, a closed
+socket, a broken pipe) or Ctrl-C ends the run at once: the result keeps
+every state answered so far and names the failure (``RunResult.failure``);
+the session takes no further run.  The handshake counts the HELLOs it sends
+again (a lost HELLO or INFO) and the frames it discards.
 
 The run therefore ends with every state answered exactly once, or with the
 list of those that were not.
@@ -36,11 +44,14 @@ import numpy as np
 from codegen.errors import MpcgenError
 
 from .framing import Discarded, Frame, FrameDecoder, encode_frame
-from .link import Link
+from .link import Link, LinkError
 from .messages import BoardInfo, ProtocolError, batch_payload, parse_error, parse_info, step_payload
 from .schema import PROTOCOL_VERSION, Msg, Schema
 
-__all__ = ["BoardMismatch", "BoardSilent", "Session", "RunResult", "RunStats"]
+__all__ = ["BoardMismatch", "BoardSilent", "Session", "RunResult", "RunStats", "INTERRUPTED"]
+
+#: ``RunResult.failure`` of a run ended by Ctrl-C
+INTERRUPTED = "interrupted (Ctrl-C)"
 
 
 class BoardMismatch(MpcgenError):
@@ -60,13 +71,15 @@ class RunStats:
     duplicates: int = 0  # RESULTs of states already answered
     unexpected: int = 0  # RESULTs of sequence numbers never sent
     resets: int = 0  # INFO mid-run
+    reordered: int = 0  # RESULTs taken after the RESULT of a state sent later
     silent: bool = False
     discarded: Counter[str] = field(default_factory=Counter)  # harness side: cobs, short, crc, oversize, length
     board_errors: Counter[str] = field(default_factory=Counter)  # ERROR messages by name
 
     def as_dict(self) -> dict[str, Any]:
         return {"frames_sent": self.frames_sent, "resent_states": self.resent_states, "duplicates": self.duplicates,
-                "unexpected": self.unexpected, "resets": self.resets, "silent": self.silent,
+                "unexpected": self.unexpected, "resets": self.resets, "reordered": self.reordered,
+                "silent": self.silent,
                 "discarded": dict(self.discarded), "board_errors": dict(self.board_errors)}
 
 
@@ -80,10 +93,18 @@ class RunResult:
     wall_s: float
     octets_out: int
     octets_in: int
+    given_up: np.ndarray | None = None  # bool (n,): sent, never answered, given up (None: every unanswered one)
+    failure: str | None = None  # the link error or Ctrl-C that ended the run early
 
     @property
     def lost(self) -> list[int]:
-        """Indices of the states never answered."""
+        """Indices of the states given up on (retries spent, the board silent)."""
+        mask = ~self.answered if self.given_up is None else self.given_up & ~self.answered
+        return [int(i) for i in np.flatnonzero(mask)]
+
+    @property
+    def unanswered(self) -> list[int]:
+        """Indices of the states without a RESULT: the lost ones and, after a failure, those never run."""
         return [int(i) for i in np.flatnonzero(~self.answered)]
 
 
@@ -116,6 +137,9 @@ class Session:
         self.silence_s = silence_s if silence_s is not None else timeout_s * (retries + 1)
         self.decoder = FrameDecoder()
         self.info: BoardInfo | None = None
+        self.handshake_retries = 0  # HELLOs sent again: no valid INFO within timeout_s
+        self.handshake_discarded: Counter[str] = Counter()  # frames discarded during handshakes, by reason
+        self.failure: str | None = None  # set when the link failed or the user interrupted: no run after it
         self._seq = 1
 
     # ------------------------------------------------------------ handshake
@@ -137,14 +161,18 @@ class Session:
 
     def handshake(self, attempts: int = 5) -> BoardInfo:
         """HELLO until INFO answers it; the board's INFO, checked against this run's hashes."""
-        for _ in range(attempts):
+        for attempt in range(attempts):
+            if attempt:
+                self.handshake_retries += 1
             seq = self._next_seq()
             self.link.write(encode_frame(Msg.HELLO, seq))
             deadline = time.perf_counter() + self.timeout_s
             while time.perf_counter() < deadline:
                 self.link.wait(0.01)
                 for item in self.decoder.feed(self.link.read_waiting()):
-                    if isinstance(item, Frame) and item.type == Msg.INFO and item.seq == seq:
+                    if isinstance(item, Discarded):
+                        self.handshake_discarded[item.reason] += 1
+                    elif item.type == Msg.INFO and item.seq == seq:
                         try:
                             info = parse_info(self.schema, item.payload)
                         except ProtocolError as exc:
@@ -153,12 +181,18 @@ class Session:
                         self.check(info)
                         self.info = info
                         return info
-        raise BoardSilent(f"no INFO after {attempts} HELLOs ({self.timeout_s:g} s each): is a board built with the "
-                          f"serial protocol on this port?")
+        garbage = sum(self.handshake_discarded.values())
+        heard = (f"; {garbage} undecodable chunk(s) arrived ({', '.join(sorted(self.handshake_discarded))}): "
+                 "something is talking, at another baud rate or another protocol? check --baud"
+                 if garbage else "; nothing at all arrived")
+        raise BoardSilent(f"no INFO after {attempts} HELLOs ({self.timeout_s:g} s each){heard}: is a board built "
+                          f"with the serial protocol on this port?")
 
     # ------------------------------------------------------------ replay
     def run(self, states: np.ndarray, expected: np.ndarray | None = None, tick: Tick | None = None) -> RunResult:
-        """Every state through the board; ``expected``: packed reference outputs (live mismatch count)."""
+        """Every state through the board; ``expected``: packed reference outputs (live mismatch count).
+
+        A link failure or Ctrl-C ends the run early: the result keeps what was answered and names it."""
         s = self.schema
         n = len(states)
         rh = s.result_head.packed_dtype.itemsize
@@ -172,10 +206,12 @@ class Session:
         mismatches = 0
         pending: deque[int] = deque(range(n))
         inflight: OrderedDict[int, _Unit] = OrderedDict()
-        owner: dict[int, tuple[int, int]] = {}  # seq -> (state, unit seq0)
+        owner: dict[int, tuple[int, int, int]] = {}  # seq -> (state, unit seq0, send order)
         unit_of: dict[int, int] = {}  # state -> seq0 of its unit in flight
         in_flight_octets = 0
         done = 0
+        sent_order = 0  # states sent so far (resends included): the order RESULTs should come back in
+        last_taken = -1  # send order of the latest RESULT taken
         t0 = time.perf_counter()
         out0, in0 = self.link.octets_out, self.link.octets_in
         last_rx = t0
@@ -200,7 +236,7 @@ class Session:
             pending.extendleft(reversed(back))
 
         def take_result(item: Frame) -> None:
-            nonlocal done, mismatches
+            nonlocal done, mismatches, last_taken
             hit = owner.get(item.seq)
             if hit is None:
                 stats.unexpected += 1
@@ -216,6 +252,9 @@ class Session:
             payloads[idx] = row
             answered[idx] = True
             done += 1
+            if hit[2] < last_taken:
+                stats.reordered += 1
+            last_taken = max(last_taken, hit[2])
             cycles.append(int.from_bytes(item.payload[:4], "little", signed=True))
             if expected is not None and not np.array_equal(row[rh:], expected[idx]):
                 mismatches += 1
@@ -235,7 +274,8 @@ class Session:
                 if not unit.remaining:
                     requeue(unit)
 
-        while done < n:
+        def send() -> None:
+            nonlocal in_flight_octets, sent_order
             now = time.perf_counter()
             while pending and in_flight_octets < self.window_octets:
                 idxs: list[int] = []
@@ -254,14 +294,18 @@ class Session:
                     pending.extendleft(reversed(idxs))
                     self._seq = seq0
                     break
-                self.link.write(frame)
-                stats.frames_sent += 1
                 unit = _Unit(seq0, idxs, now, len(frame), set(idxs))
-                inflight[seq0] = unit
+                inflight[seq0] = unit  # in flight before the write: a failing write leaves it unanswered
                 in_flight_octets += len(frame)
                 for k, idx in enumerate(idxs):
-                    owner[(seq0 + k) & 0xFFFF] = (idx, seq0)
+                    owner[(seq0 + k) & 0xFFFF] = (idx, seq0, sent_order)
+                    sent_order += 1
                     unit_of[idx] = seq0
+                self.link.write(frame)
+                stats.frames_sent += 1
+
+        def receive() -> None:
+            nonlocal last_rx
             data = self.link.read_waiting()
             if not data:
                 self.link.wait(0.002)
@@ -290,19 +334,30 @@ class Session:
                     except ProtocolError:
                         stats.discarded["length"] += 1
                 # PONG and anything else: ignored
-            now = time.perf_counter()
-            for unit in [u for u in inflight.values() if now - u.sent_s > self.timeout_s]:
-                requeue(unit)
-            if inflight and now - last_rx > self.silence_s:
-                stats.silent = True
-                left = ~answered & ~lost
-                done += int(left.sum())
-                lost |= left
-                inflight.clear()
-                break
-            if tick is not None:
-                tick(done, mismatches, cycles)
-            if not inflight and not pending and done < n:  # nothing left to send: the rest was lost
-                break
+
+        failure = self.failure
+        try:
+            while failure is None and done < n:
+                send()
+                receive()
+                now = time.perf_counter()
+                for unit in [u for u in inflight.values() if now - u.sent_s > self.timeout_s]:
+                    requeue(unit)
+                if inflight and now - last_rx > self.silence_s:
+                    stats.silent = True
+                    left = ~answered & ~lost
+                    done += int(left.sum())
+                    lost |= left
+                    inflight.clear()
+                    break
+                if tick is not None:
+                    tick(done, mismatches, cycles)
+                if not inflight and not pending and done < n:  # nothing left to send: the rest was lost
+                    break
+        except LinkError as exc:
+            failure = str(exc)
+        except KeyboardInterrupt:
+            failure = INTERRUPTED
+        self.failure = failure
         return RunResult(payloads, answered, stats, time.perf_counter() - t0,
-                         self.link.octets_out - out0, self.link.octets_in - in0)
+                         self.link.octets_out - out0, self.link.octets_in - in0, lost, failure)

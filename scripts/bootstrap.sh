@@ -24,6 +24,8 @@ command -v gcc >/dev/null 2>&1 || need_apt+=(gcc)
 # libFuzzer + sanitizers for the frame decoder's fuzz test (tests/hil/test_fuzz.py): Debian bookworm's clang 14
 command -v clang >/dev/null 2>&1 || need_apt+=(clang)
 [ -n "$(ls /usr/lib/llvm-*/lib/clang/*/lib/linux/libclang_rt.fuzzer-x86_64.a 2>/dev/null)" ] || need_apt+=(libclang-rt-14-dev)
+# headless Chromium: the evidence page's test renders it (tests/stages/test_evidence.py: --dump-dom, --screenshot)
+command -v chromium >/dev/null 2>&1 || need_apt+=(chromium)
 if [ ${#need_apt[@]} -gt 0 ]; then
   if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
     echo "bootstrap: apt-get install ${need_apt[*]}" >&2

@@ -142,3 +142,27 @@ def test_subprocess_has_no_traceback(tmp_path):
     assert r.returncode == 2
     assert "Traceback" not in r.stderr and "motor.rs_ohm" in r.stderr
     assert len(r.stderr.strip().splitlines()) == 1
+
+
+def test_option_abbreviations_are_refused(tmp_path, capsys):
+    """``--plot X`` once meant ``--plots X`` (argparse prefix matching) and wrote a folder named X."""
+    assert main(["simulate", str(SPMSM), "--plot", str(tmp_path / "abbr.png"), "-q"]) == 2
+    assert "unrecognized arguments: --plot" in capsys.readouterr().err
+    assert not (tmp_path / "abbr.png").exists()
+
+
+@pytest.mark.parametrize("text,value", [("1000000", 1_000_000), ("1e6", 1_000_000), ("1_000", 1000), ("2.0e3", 2000)])
+def test_counts_are_written_as_the_docs_write_them(text, value):
+    from codegen.cliargs import count
+
+    assert count(text) == value
+
+
+@pytest.mark.parametrize("text", ["1.5e0", "ten", "1e30"])
+def test_a_count_that_is_not_whole_is_refused(text):
+    import argparse
+
+    from codegen.cliargs import count
+
+    with pytest.raises(argparse.ArgumentTypeError):
+        count(text)

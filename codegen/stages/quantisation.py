@@ -3,8 +3,11 @@
 Per strategy of the config's topology:
 
 a. the Q format, representable range and resolution of every real input and
-   output field (by unit), and every constant: float64 value, stored count,
-   relative rounding error;
+   output field (by unit), and every constant: float64 value of the fixed
+   step's own definition (its sin/cos table size and polynomial: like with
+   like), stored count, relative rounding error, and whether the float32
+   controller defines it the same way (else "differs by definition" and why,
+   never a comparison of two definitions);
 b. the error of the fixed-point step's outputs (``te_est_nm``,
    ``psi_est_wb``, ``cost_best``) against a float64 ideal: the topology's
    Python reference run with :data:`FLOAT64` (float64 constants, one float64
@@ -31,6 +34,7 @@ from typing import Any
 import numpy as np
 
 from codegen.errors import UsageError
+from codegen.kernels.trig import sincos_constants
 from codegen.model import Model
 from codegen.numfmt import FLOAT_CONTROLLER, IDEAL, QUANTISED, number_format
 from codegen.records import REAL, Record, RecordLayout
@@ -87,16 +91,48 @@ def _signal_rows(layout: RecordLayout, observed: np.ndarray, ok: np.ndarray) -> 
     return rows
 
 
-def _constant_rows(t_fx: Any, t_64: Any) -> list[dict[str, Any]]:
+def _approximation_values(nf: Any) -> dict[str, float]:
+    """The float64 values of the sin/cos constants of format ``nf`` by name: its own table size and
+    polynomial (``codegen.kernels.trig``), which the float64 ideal's need not share."""
+    return {name: float(v) for name, v, *_ in sincos_constants(nf)}
+
+
+def _definition(name: str, own: float, unit: str, nf_fx: Any, t_32: Any, approximation: set[str]) -> str:
+    """"same" when the float32 controller's constant ``name`` is ``own`` (the fixed definition's float64
+    value) rounded to float32, else "differs by definition: ..." and why (the sin/cos table size and
+    terms, or the two values)."""
+    f32 = next((c for c in t_32.consts if c.name == name), None)
+    if f32 is not None and t_32.nf.const(own, unit) == f32.value:
+        return "same"
+    a, b = nf_fx.sincos_form, t_32.nf.sincos_form
+    if name in approximation and a != b:
+        why = f"N={a.table_n} vs N={b.table_n} (sin/cos table; {a.sin_terms}+{a.cos_terms} vs " \
+              f"{b.sin_terms}+{b.cos_terms} polynomial terms)"
+    elif f32 is None:
+        why = f"not in the {FLOAT_CONTROLLER} step"
+    else:
+        why = f"{QUANTISED} {own:.6g} vs {FLOAT_CONTROLLER} {float(f32.value):.6g}"
+    return f"differs by definition: {why}"
+
+
+def _constant_rows(t_fx: Any, t_64: Any, t_32: Any) -> list[dict[str, Any]]:
+    """Every constant of the fixed step (``t_fx``): its float64 value under the fixed step's own
+    definition (the float64 ideal's ``t_64`` value, the sin/cos constants of the fixed format's own
+    table and polynomial), the stored count and value, the relative rounding error between the two
+    (None without a float64 value), and whether the float32 controller's (``t_32``) constant of that
+    name has the same definition (:func:`_definition`)."""
     sc = t_fx.scaling
-    ideal = {c.name: float(c.value) for c in t_64.consts}
+    approximation = _approximation_values(t_fx.nf)
+    own: dict[str, float] = {c.name: float(c.value) for c in t_64.consts} | approximation
     rows = []
     for c in t_fx.consts:
-        v = ideal.get(c.name, float("nan"))
         stored = float(sc.decode(c.unit, int(c.value)))
-        rel = abs(stored - v) / abs(v) if v else (0.0 if stored == 0.0 else float("inf"))
+        v = own.get(c.name)
+        rel = None if v is None else abs(stored - v) / abs(v) if v else (0.0 if stored == 0.0 else float("inf"))
         rows.append({"name": c.name, "unit": c.unit, "q": sc.describe(c.unit), "value": v, "count": int(c.value),
-                     "stored": stored, "rel_error": rel, "doc": c.doc})
+                     "stored": stored, "rel_error": rel, "doc": c.doc,
+                     "definition": "no float64 value" if v is None else
+                     _definition(c.name, v, c.unit, t_fx.nf, t_32, set(approximation))})
     return rows
 
 
@@ -208,7 +244,7 @@ def analyse(model: Model, strategies: list[str] | None = None, random_states: in
             "scaling": {"frac_bits": sc.frac_bits, "exps_v_a_s": list(sc.exps), "mode": sc.mode},
             "signals": (_signal_rows(topo.input_record.bind(t_fx.nf), cl_fx, ok_in)
                         + _signal_rows(output.bind(t_fx.nf), o_fx, ok_in)),
-            "constants": _constant_rows(t_fx, t_64),
+            "constants": _constant_rows(t_fx, t_64, t_32),
             "errors": errors,
             "agreement": {"closed_loop": _agreement(topo, t_32, t_fx, cl32, cl_fx),
                           "closed_loop_fixed": _agreement(topo, t_32, t_fx, own32, own_fx),

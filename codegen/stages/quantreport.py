@@ -3,22 +3,29 @@
 ``mpcgen report CFG`` prints the markdown (``-o DIR``: writes
 ``<prefix>_quantisation.md`` and the plots there; ``--json F``: the data);
 ``mpcgen generate`` writes the markdown of the generated strategy for a
-fixed-point config.  The markdown holds no dates, paths or wall times: the
-same config gives the same bytes.
+fixed-point config.  Each strategy's section names the C hash
+(``codegen.manifest``) of the C generated for the config's target, the hash
+``<prefix>_manifest.json`` beside that C names.  The markdown holds no dates,
+paths or wall times: the same config gives the same bytes.
 """
 from __future__ import annotations
 
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from codegen import __version__
+from codegen.manifest import C_HASH_DEFINITION, c_hash, manifest_name
 from codegen.model import Model
 from codegen.numfmt import FLOAT_CONTROLLER, QUANTISED
 from codegen.stages.quantisation import ERROR_FIELDS, RIPPLE_KEYS
 
-__all__ = ["markdown", "plots", "report_name"]
+__all__ = ["c_hashes", "markdown", "plots", "report_name"]
+
+#: the target the analysis may run on for another target's report (``generate``)
+HOST = "host"
 
 _SETS = {
     "closed_loop": "float32 closed-loop states (converted to fixed)",
@@ -53,11 +60,19 @@ def _formats(d: dict[str, Any]) -> list[str]:
         lines.append(f"| {r['record']} | {r['field']} | {r['unit'] or '1'} | {r['q']} | {_g(r['largest'])} | "
                      f"{_g(r['resolution'])} | {_g(seen)} | {head} |")
     lines += ["", "Largest |x| seen: over the fixed step's inputs and outputs on the float32 closed-loop states.",
-              "", "| constant | unit | Q format | value (float64) | stored count | stored value | relative error |",
-              "|---|---|---|---|---|---|---|"]
+              "", "| constant | unit | Q format | value (float64, fixed definition) | stored count | stored value | "
+                  "relative error | float32 definition |",
+              "|---|---|---|---|---|---|---|---|"]
     for c in d["constants"]:
-        lines.append(f"| {c['name']} | {c['unit'] or '1'} | {c['q']} | {c['value']!r} | {c['count']} | "
-                     f"{c['stored']!r} | {_g(c['rel_error'], '.3e')} |")
+        value = "-" if c["value"] is None else repr(c["value"])
+        rel = "-" if c["rel_error"] is None else _g(c["rel_error"], ".3e")
+        lines.append(f"| {c['name']} | {c['unit'] or '1'} | {c['q']} | {value} | {c['count']} | "
+                     f"{c['stored']!r} | {rel} | {c['definition']} |")
+    lines += ["", "Relative error: the stored value against the float64 value of the same definition, the fixed "
+                  "step's own (its sin/cos table size and polynomial). 'differs by definition': the float32 "
+                  "controller's constant of that name is another value (another sin/cos table or guard), so the two "
+                  "are not compared. The sin/cos constants' precision is the approximation's (a tested property, "
+                  "numerics.md), not checked per constant: a small coefficient of a high power of r keeps few counts."]
     return lines
 
 
@@ -93,19 +108,38 @@ def _closed_loop(d: dict[str, Any]) -> list[str]:
     return lines
 
 
-def markdown(model: Model, data: dict[str, Any], plot_files: dict[str, list[str]] | None = None) -> str:
-    """The report of ``data`` (``analyse`` of ``model``); ``plot_files``: per strategy, the PNG file names."""
+def c_hashes(model: Model, strategies: Iterable[str]) -> dict[str, str]:
+    """The C hash (``codegen.manifest``) of the C ``generate`` writes for each strategy of ``model`` and
+    ``model.target``."""
+    return {s: c_hash(model.with_controller(strategy=s)) for s in strategies}
+
+
+def markdown(model: Model, data: dict[str, Any], hashes: Mapping[str, str],
+             plot_files: dict[str, list[str]] | None = None) -> str:
+    """The report of ``data`` (``analyse`` of ``model``, or of its host twin: the same arithmetic) about
+    the generated C of ``model.target``; ``hashes``: per strategy, the C hash of that C (:func:`c_hashes`);
+    ``plot_files``: per strategy, the PNG file names."""
     lines = [f"# {model.prefix}: quantisation report (fixed point)", "",
-             f"- config: `{model.name}` (hash {data['config_hash']}), topology {data['topology']}, mpcgen {__version__}",
-             "- ideal: the topology's Python reference in float64 (float64 constants, one float64 rounding per "
-             "operation) on the fixed inputs decoded exactly; the float32 step on the same states is the second column",
-             "- agreement: fixed vs float32 decisions on the same physical states, over the states both input guards "
-             "pass; 'one guard trips': a value at a guard limit rounded across it by the conversion, or an angle "
-             "beyond the fixed-point angle guard",
-             "- closed loop: the topology's scenario run(s) with the fixed controller and with its float32 twin"]
+             f"- config: `{model.name}` (hash {model.config_hash()}), target {model.target}, topology "
+             f"{data['topology']}, mpcgen {__version__}"]
+    if data["config_hash"] != model.config_hash():
+        if data["config_hash"] != model.replace(target=HOST).config_hash():
+            raise ValueError(f"the analysis is of config hash {data['config_hash']}, neither {model.name} "
+                             f"({model.config_hash()}) nor its {HOST} twin")
+        lines.append(f"- analysed: the {HOST} build and the Python reference of this config with target.name = "
+                     f"{HOST} (the same arithmetic: target profiles differ only in placement attributes and comments)")
+    lines += [f"- generated C: the C hash of each strategy names the `.c`/`.h` files `mpcgen generate` writes for "
+              f"target {model.target} (the `c_hash` of `{manifest_name(model)}`; {C_HASH_DEFINITION})",
+              "- ideal: the topology's Python reference in float64 (float64 constants, one float64 rounding per "
+              "operation) on the fixed inputs decoded exactly; the float32 step on the same states is the second column",
+              "- agreement: fixed vs float32 decisions on the same physical states, over the states both input guards "
+              "pass; 'one guard trips': a value at a guard limit rounded across it by the conversion, or an angle "
+              "beyond the fixed-point angle guard",
+              "- closed loop: the topology's scenario run(s) with the fixed controller and with its float32 twin"]
     seen: dict[str, str] = {}
     for s, d in data["strategies"].items():
-        lines += ["", f"## Strategy {s}", "", "### Q formats, ranges and constants"]
+        lines += ["", f"## Strategy {s}", "", f"- generated C for target {model.target}: C hash `{hashes[s]}`",
+                  "", "### Q formats, ranges and constants"]
         key = repr((d["scaling"], [(r["field"], r["q"]) for r in d["signals"]], d["constants"]))
         if key in seen:
             lines += ["", f"Same formats and constants as {seen[key]}."]

@@ -5,7 +5,11 @@ states ((a) the variant's own closed-loop run, (b) random states over the
 operating range, (c) adversarial states), run both implementations over the
 whole batch and compare every output field's bits.  On a mismatch the first
 offending state is printed with every intermediate value from both sides.
-Topology-agnostic: everything topology-specific comes from the plugin.
+Each result names the C it is about by C hash (``codegen.manifest``): the
+host C compiled and compared, and the C ``generate`` writes for the config's
+target (the same arithmetic: target profiles differ only in placement
+attributes and comments).  Topology-agnostic: everything topology-specific
+comes from the plugin.
 """
 from __future__ import annotations
 
@@ -16,18 +20,21 @@ import os
 import time
 from collections.abc import Callable, Iterator
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
 import numpy as np
 
 from codegen.compare import describe_mismatch, mismatch_mask
 from codegen.errors import UsageError
+from codegen.manifest import c_hash_of, sources
 from codegen.model import Model
 from codegen.stages.fwdata import evenly_spaced
 from codegen.topology import topology_of
 
 CHUNK = 250_000
+#: the target whose C verification compiles (``Topology.host_library``)
+COMPILED_TARGET = "host"
 #: fewer states than this are compared in this process (a pool costs more than it saves)
 PARALLEL_MIN_STATES = 50_000
 #: seed of the random states
@@ -47,6 +54,14 @@ class StrategyResult:
     first_mismatch: str = ""
     wall_s: float = 0.0
     states_per_s: float = 0.0
+    #: the target whose generated C ``c_hash`` names: the config's ``target.name``
+    c_hash_target: str = ""
+    #: C hash (``codegen.manifest``) of the C ``generate`` writes for ``c_hash_target``: what ships
+    c_hash: str = ""
+    #: the target of the C this run compiled and compared: always the host
+    compiled_target: str = ""
+    #: C hash of that host C: what was compiled (``c_hash`` too when ``c_hash_target`` is the host)
+    compiled_c_hash: str = ""
 
     def as_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -76,8 +91,20 @@ def verify_strategy(
     parts["adversarial"] = topo.adversarial_states(model, tables, max(n_adv, 1000))[:n_adv]
     n_random = max(n_states - sum(len(p) for p in parts.values()), 0)
     parts["random"] = topo.random_states(model, tables, n_random, RANDOM_SEED)
-    return compare_batches(model.controller.strategy, parts, functools.partial(topo.step_batch, tables),
-                           lib.step_batch, log, t0)
+    result = compare_batches(model.controller.strategy, parts, functools.partial(topo.step_batch, tables),
+                             lib.step_batch, log, t0)
+    return named_c(result, model, tables)
+
+
+def named_c(result: StrategyResult, model: Model, tables: Any) -> StrategyResult:
+    """``result`` of verifying ``model`` (derived ``tables``) with the C it is about, by C hash
+    (``codegen.manifest``): ``compiled_c_hash``, the host C it compiled (``compiled_target``), and
+    ``c_hash``, the C ``generate`` writes for the config's target (``c_hash_target``), the same
+    arithmetic in the target's placement."""
+    compiled = c_hash_of(sources(model, COMPILED_TARGET, tables))
+    shipped = compiled if model.target == COMPILED_TARGET else c_hash_of(sources(model, model.target, tables))
+    return replace(result, c_hash_target=model.target, c_hash=shipped, compiled_target=COMPILED_TARGET,
+                   compiled_c_hash=compiled)
 
 
 def workers() -> int:

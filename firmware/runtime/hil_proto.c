@@ -108,25 +108,34 @@ static void step_one(const uint16_t *octets, uint16_t seq)
     send_frame(HIL_MSG_RESULT, seq, (uint16_t)(HIL_RESULT_HEAD_OCTETS + HIL_OUTPUT_OCTETS));
 }
 
-/* seq of the next TELEMETRY frame of an on-board run. */
-static uint16_t telemetry_seq;
+/* The on-board run: its SETPOINTS' seq, the index of its next TELEMETRY frame and the window of
+ * frames sent (frame_first .. frame_first + frame_count - 1; the others are computed, not sent). */
+static uint16_t run_seq;
+static int32_t run_frame;
+static int32_t run_first;
+static int32_t run_count;
 
 static void emit_telemetry(const hil_sample_t *samples, uint16_t n)
 {
     hil_telemetry_head_t head;
+    const int32_t idx = run_frame;
     uint16_t i;
+    ++run_frame;
+    if (idx < run_first || idx - run_first >= run_count) {
+        return;
+    }
     head.count = n;
     hil_encode_telemetry_head(&head, &tx[HIL_HEAD]);
     for (i = 0u; i < n; ++i) {
         hil_encode_sample(&samples[i], &tx[HIL_HEAD + HIL_TELEMETRY_HEAD_OCTETS + i * HIL_SAMPLE_OCTETS]);
     }
-    send_frame(HIL_MSG_TELEMETRY, telemetry_seq,
+    send_frame(HIL_MSG_TELEMETRY, (uint16_t)(run_seq + 1u + (uint16_t)((uint32_t)idx & 0xFFFFu)),
                (uint16_t)(HIL_TELEMETRY_HEAD_OCTETS + n * HIL_SAMPLE_OCTETS));
-    telemetry_seq = (uint16_t)(telemetry_seq + 1u);
 }
 
-/* SETPOINTS: run plant and controller on board (onboard.h), TELEMETRY frames
- * (seq + 1, seq + 2, ...), then RUN_END (seq). */
+/* SETPOINTS: run plant and controller on board (onboard.h), TELEMETRY frame i (seq + 1 + i) for the
+ * frames of the window, then RUN_END (seq).  A frame of the wrong length or invalid setpoints: ERROR
+ * (LENGTH, SETPOINTS), nothing run. */
 static void handle_setpoints(const uint16_t *p, uint16_t n, uint16_t seq)
 {
     static hil_setpoints_t sp;
@@ -142,7 +151,10 @@ static void handle_setpoints(const uint16_t *p, uint16_t n, uint16_t seq)
         send_error(HIL_ERR_SETPOINTS, seq, bad);
         return;
     }
-    telemetry_seq = (uint16_t)(seq + 1u);
+    run_seq = seq;
+    run_frame = 0;
+    run_first = sp.frame_first;
+    run_count = sp.frame_count;
     onboard_run(&sp, overhead, emit_telemetry, &end);
     hil_encode_run_end(&end, &tx[HIL_HEAD]);
     send_frame(HIL_MSG_RUN_END, seq, HIL_RUN_END_OCTETS);

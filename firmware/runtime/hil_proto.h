@@ -15,9 +15,11 @@
  * answered in order: HELLO -> INFO, STEP -> RESULT, BATCH of n -> n RESULTs
  * (seq, seq + 1, ...), PING -> PONG (same payload), RESET -> INFO (the
  * protocol state restarts), SETPOINTS -> an on-board run of plant and
- * controller (onboard.h): TELEMETRY frames (seq + 1, seq + 2, ...), then
- * RUN_END (seq); input is not read during the run.  INFO is also sent
- * once at start-up (seq 0).
+ * controller (onboard.h): TELEMETRY frame i as seq + 1 + i (mod 2^16) for
+ * the frames of the SETPOINTS' window (frame_first, frame_count: the run is
+ * deterministic, so the harness asks for lost frames again with a window
+ * of those), then RUN_END (seq); input is not read during the run.  INFO
+ * is also sent once at start-up (seq 0).
  * Cycles: only the controller call is timed (mpc_timed_step), the
  * measurement overhead (mpc_overhead) subtracted.
  */

@@ -44,6 +44,9 @@ uint16_t onboard_check(const hil_setpoints_t *sp)
             return 4u;
         }
     }
+    if (sp->frame_first < 0 || sp->frame_count < 0) {
+        return 5u;
+    }
     return 0u;
 }
 

@@ -49,10 +49,12 @@ typedef struct {
     sim_real_t x[5];
 } onb_plant_t;
 
-/* Called with every full block of samples (and the last, shorter one). */
+/* Called with every full block of samples (and the last, shorter one), whether or not the block is sent:
+ * the run does not depend on the frame window. */
 typedef void (*onb_emit_fn)(const hil_sample_t *samples, uint16_t n);
 
-/* 0 if the setpoints are valid, else the ERROR detail (1 periods, 2 decimation, 3 step count, 4 step order). */
+/* 0 if the setpoints are valid, else the ERROR detail (1 periods, 2 decimation, 3 step count, 4 step order,
+ * 5 frame window: frame_first or frame_count negative). */
 uint16_t onboard_check(const hil_setpoints_t *sp);
 
 /* Run the profile from rest (plant, PI, topology state reset); fill *end. */

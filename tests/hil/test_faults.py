@@ -1,5 +1,5 @@
-"""Faults between harness and board: each is detected and reported, nothing corrupted is taken as a
-result, and every state is answered exactly once or listed as lost."""
+"""Faults between harness and board: each is detected and reported (in the JSON and on the summary line),
+nothing corrupted is taken as a result, and every state is answered exactly once or listed as lost."""
 from __future__ import annotations
 
 import numpy as np
@@ -7,7 +7,8 @@ import pytest
 from hil_support import example
 
 from hil.faults import Fault, FaultLink
-from hil.replay import replay
+from hil.progress import timing_prefix
+from hil.replay import replay, summary_line
 from hil.schema import Schema
 from hil.session import BoardMismatch, Session
 
@@ -27,6 +28,8 @@ def _run(board, faults: list[Fault], **session_kw):
         session.handshake()
         data = replay(session, m, t, sets, show_progress=False)
     assert sorted(map(str, flink.applied)) == sorted(map(str, faults)), "a planned fault did not happen"
+    # every fault leaves a trace on the console: the line of a clean run is never printed
+    assert "  wire: " in summary_line(data), (faults, data["wire"])
     return data
 
 
@@ -78,6 +81,35 @@ def test_duplicated_frame(board, direction):
     assert data["wire"]["duplicates"] >= 1
 
 
+@pytest.mark.parametrize("direction", ["out", "in"])
+def test_reordered_frames_are_counted(board, direction):
+    """Two frames swapped: in, two RESULTs of one BATCH (the later taken first); out, two BATCHes (the
+    board answers the later one first, the earlier one's states are sent again)."""
+    data = _run(board, [Fault("reorder", direction, 5)])
+    _all_answered_once(data)
+    w = data["wire"]
+    assert w["reordered"] >= 1, w
+    assert "reordered" in summary_line(data)
+    if direction == "out":
+        assert w["resent_states"] >= 1
+
+
+@pytest.mark.parametrize("kind,direction", [("drop", "in"), ("corrupt", "in"), ("drop", "out"), ("corrupt", "out")])
+def test_handshake_retries_are_counted(board, kind, direction):
+    """A lost or corrupted HELLO or INFO: the handshake says HELLO again, and the run counts it.  Towards
+    the harness, frames 0 and 1 are hit: frame 0 is the INFO a board announces when it starts unless
+    opening the port flushed it, then frame 1 answers the first HELLO (else frame 0 does, and frame 1 the
+    second)."""
+    frames = [0] if direction == "out" else [0, 1]
+    data = _run(board, [Fault(kind, direction, k) for k in frames])
+    _all_answered_once(data)
+    retries = data["wire"]["handshake_retries"]
+    assert retries >= 1, data["wire"]
+    assert f"handshake retries {retries}" in summary_line(data)
+    if kind == "corrupt" and direction == "in":
+        assert sum(data["wire"]["discarded"].values()) >= 1
+
+
 def test_board_reset_mid_run(board):
     data = _run(board, [Fault("reset", "out", 8)])
     _all_answered_once(data)
@@ -122,4 +154,24 @@ def test_nothing_corrupted_is_a_match(board):
     _all_answered_once(data)
     assert data["wire"]["discarded"].get("crc", 0) + data["wire"]["discarded"].get("cobs", 0) \
         + data["wire"]["discarded"].get("short", 0) >= len(faults) - 1
-    assert np.isfinite(data["cycles_max"])
+    assert np.isfinite(data[timing_prefix(data["cycle_unit"]) + "_max"])
+
+
+def test_a_fault_after_a_drop_on_the_same_frame_has_nothing_to_alter():
+    """Two faults on one frame, the first a drop: the frame stays dropped (the injector once indexed an
+    empty frame list)."""
+
+    class Sink:
+        octets_out = octets_in = 0
+
+        def __init__(self) -> None:
+            self.sent = b""
+
+        def write(self, data: bytes) -> None:
+            self.sent += data
+
+    sink = Sink()
+    flink = FaultLink(sink, [Fault("drop", "out", 0), Fault("corrupt", "out", 0), Fault("truncate", "out", 0)])
+    flink.write(b"\x00abc\x00\x00def\x00")
+    assert sink.sent == b"\x00def\x00"
+    assert len(flink.applied) == 3

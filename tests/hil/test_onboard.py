@@ -46,6 +46,15 @@ def model_of(config, strategy: str, overrides: dict):
     return m, topology_of(m).derive(m)
 
 
+def timing(data: dict, stat: str):
+    """A timing statistic of the summary: ``cycles_<stat>`` (onboard()) or under the board's unit's prefix
+    (the command's JSON: host_ns_<stat>, instructions_<stat>, ...)."""
+    for prefix in ("cycles", "host_ns", "instructions", "ns"):
+        if f"{prefix}_{stat}" in data:
+            return data[f"{prefix}_{stat}"]
+    raise KeyError(f"no {stat} timing in {sorted(data)}")
+
+
 def check(data: dict, decimation: int = 1) -> None:
     assert data["complete"] and data["status"] == 0 and data["periods_done"] == data["periods"] >= 2000
     assert data["samples"] == data["samples_expected"] == -(-data["periods"] // decimation)
@@ -56,8 +65,13 @@ def check(data: dict, decimation: int = 1) -> None:
     assert data["decision_changes"] > 100  # the controller switches
     # the step's time less the timer's measured overhead, floored at 0: a host step can be
     # quicker than the overhead's estimate (virtual board), never all of them
-    assert 0 <= data["cycles_min"] <= data["cycles_mean"] <= data["cycles_max"] and data["cycles_mean"] > 0
-    assert sum(data["cycles_hist"]) == data["periods"]
+    assert 0 <= timing(data, "min") <= timing(data, "mean") <= timing(data, "max") and timing(data, "mean") > 0
+    assert sum(timing(data, "hist")) == data["periods"]
+    # a clean link: one SETPOINTS, every frame once
+    assert data["failure"] is None and data["gaps"] == [] and len(data["setpoints"]) == 1
+    w = data["wire"]
+    assert w["setpoints_sent"] == 1 and w["duplicates"] == w["unexpected"] == w["frames_asked_again"] == 0, w
+    assert data["periods_per_s"] > 0
 
 
 @pytest.mark.board

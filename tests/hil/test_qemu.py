@@ -71,13 +71,22 @@ def test_qemu_replays_the_bench_set_with_bench_instruction_counts(config, strate
 
 def test_hil_command_on_qemu(tmp_path, capsys):
     out = tmp_path / "hil.json"
-    rc = main(["hil", str(SPMSM), "--set", "controller.tables=published", "--set", "controller.strategy=s2",
-               "--board", "qemu-m7", "--states", "2100", "--json", str(out)])
+    sets = ["--set", "controller.tables=published", "--set", "controller.strategy=s2", "--set", "target.name=stm32h743"]
+    rc = main(["hil", str(SPMSM), *sets, "--board", "qemu-m7", "--states", "2100", "--json", str(out)])
     data = json.loads(out.read_text())
     assert rc == 0, capsys.readouterr().err
+    # the JSON names the C the emulated STM32H743 runs: the hash generate's manifest names for that target
+    assert main(["generate", str(SPMSM), *sets, "--target", "stm32h743", "-o", str(tmp_path / "c"), "-q"]) == 0
+    manifest = json.loads(next((tmp_path / "c").glob("*_manifest.json")).read_text())
+    assert (data["c_hash"], data["c_hash_target"]) == (manifest["c_hash"], "stm32h743")
     assert data["states"] == 2100 and data["mismatches"] == 0 and data["lost"] == 0
     assert data["cycle_unit"] == "instructions" and data["board"]["target"] == "qemu-m7"
     assert data["wire"]["resent_states"] == 0
+    # QEMU counts instructions (-icount): instructions_* keys, no cycles_*, and no clock printed
+    assert 0 < data["instructions_min"] <= data["instructions_median"] <= data["instructions_max"]
+    assert not [k for k in data if k.startswith("cycles_")]
+    err = capsys.readouterr().err
+    assert "timings in instructions" in err and " Hz" not in err
 
 
 def test_qemu_is_killed_and_its_port_freed(tmp_path):
