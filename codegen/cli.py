@@ -156,19 +156,23 @@ def cmd_generate(args: argparse.Namespace) -> int:
 # ---------------------------------------------------------------- verify
 def cmd_verify(args: argparse.Namespace) -> int:
     from codegen.manifest import C_HASH_DEFINITION
-    from codegen.stages.verify import verify_strategy
+    from codegen.stages.verify import check_verify_memory, verify_strategy
 
     model = load_model(args)
     cliargs.at_least("--states", args.states, 1)
     cliargs.output_file("--json", args.json)
     strategies = _strategies(args, model)
+    check_verify_memory(model, strategies, args.states, closed_loop=not args.no_closed_loop)
     log = progress_log(args.quiet)
     model = with_trained_tables(model, strategies, log)
     results = []
     for s in strategies:
         variant = model.with_controller(strategy=s)
         log(f"verify {model.name} / {s}: building and comparing {args.states} states")
-        r = verify_strategy(variant, args.states, log=log, closed_loop=not args.no_closed_loop)
+        try:
+            r = verify_strategy(variant, args.states, log=log, closed_loop=not args.no_closed_loop)
+        except MemoryError:  # the estimate checked above is an estimate: other processes take memory too
+            raise UsageError(f"--states = {args.states}: verifying {s} ran out of memory: lower --states") from None
         results.append(r)
         print(f"{s:12s} states {r.states:>9d}  mismatches {r.mismatches}  ({r.states_per_s:,.0f} states/s, "
               f"closed-loop {r.sources.get('closed_loop', 0)}, adversarial {r.sources['adversarial']}, "

@@ -1,17 +1,23 @@
-"""Figure helpers every topology's plots share (matplotlib object API, Agg canvas, no GUI).
+"""Figure helpers every figure of mpcgen shares (matplotlib object API, Agg canvas, no GUI).
 
 Figures are built with ``matplotlib.figure.Figure`` rendered by the Agg
-canvas, so no pyplot state and no display are involved.
+canvas, so no pyplot state and no display are involved.  Each PNG carries its
+axes' titles in its ``Title`` text chunk and, where the figure says what it
+shows (``save_figure(..., described=...)``), that in ``Description`` (JSON),
+so that a test (or a reader) can check a figure against the figures it
+claims to show.  The plots of a closed-loop run are in
+``codegen.simulator.figures``.
 """
 from __future__ import annotations
 
+import json
 from pathlib import Path
 from typing import Any
 
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-__all__ = ["new_figure", "save_figure", "plot_lines", "plot_torque", "plot_phase_currents"]
+__all__ = ["new_figure", "save_figure", "heading", "span", "plot_lines"]
 
 DPI = 120
 SIZE_IN = (9.0, 4.5)
@@ -25,10 +31,29 @@ def new_figure(nrows: int = 1, height: float = SIZE_IN[1]) -> tuple[Figure, Any]
     return fig, axes
 
 
-def save_figure(fig: Figure, path: Path) -> Path:
-    """Write ``fig`` as PNG to ``path``; return the path."""
-    fig.savefig(path, format="png")
+def save_figure(fig: Figure, path: Path, described: dict[str, Any] | None = None) -> Path:
+    """Write ``fig`` as PNG to ``path``; return the path.  A two-line title (:func:`heading`) is set in
+    10 pt, so that it fits the width.  The PNG's ``Title`` chunk holds the axes' titles (`` | `` between
+    axes), ``Description`` the JSON of ``described`` (what the figure shows)."""
+    titles = " | ".join(ax.get_title() for ax in fig.get_axes() if ax.get_title())
+    for ax in fig.get_axes():
+        if "\n" in ax.get_title():
+            ax.title.set_fontsize(10)
+    meta = {"Title": titles}
+    if described is not None:
+        meta["Description"] = json.dumps(described, sort_keys=True)
+    fig.savefig(path, format="png", metadata=meta)
     return path
+
+
+def heading(title: str, what: str) -> str:
+    """A two-line axes title: the run (``title``), then what the plot shows and over which span."""
+    return f"{title}\n{what}"
+
+
+def span(t0_s: float, t1_s: float) -> str:
+    """A time span as the tables print it: ``[t0, t1) s``, 4 significant digits."""
+    return f"[{t0_s:.4g}, {t1_s:.4g}) s"
 
 
 def plot_lines(path: Path, title: str, ylabel: str, t: Any,
@@ -43,24 +68,4 @@ def plot_lines(path: Path, title: str, ylabel: str, t: Any,
     ax.set(xlabel="time t / s", ylabel=ylabel, title=title)
     ax.grid(True, alpha=0.3)
     ax.legend(loc="best")
-    return save_figure(fig, path)
-
-
-def plot_torque(path: Path, title: str, trace: Any) -> Path:
-    """Plant torque Te and the reference T* of a closed-loop run."""
-    return plot_lines(path, f"{title}: electromagnetic torque", "torque / (N*m)", trace.t_s, [
-        (trace.te_nm, "plant torque Te", {"color": "tab:blue", "lw": 0.4}),
-        (trace.torque_ref_nm, "reference T*", {"color": "k", "lw": 1.0}),
-    ])
-
-
-def plot_phase_currents(path: Path, title: str, trace: Any, zoom: slice) -> Path:
-    """Phase currents i_a, i_b, i_c over the whole run (top) and over ``zoom`` (bottom)."""
-    fig, axes = new_figure(2, height=7.0)
-    for ax, sl, label in ((axes[0], slice(0, trace.n), "whole run"), (axes[1], zoom, "zoom")):
-        for name in ("ia_a", "ib_a", "ic_a"):
-            ax.plot(trace.t_s[sl], getattr(trace, name)[sl], lw=0.5, label=f"i_{name[1]}")
-        ax.set(xlabel="time t / s", ylabel="phase current / A", title=f"{title}: phase currents ({label})")
-        ax.grid(True, alpha=0.3)
-        ax.legend(loc="upper right")
     return save_figure(fig, path)

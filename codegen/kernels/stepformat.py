@@ -13,21 +13,24 @@ is rounded once to it.  Ranges (float64, SI):
 * the topology's cost bound (its worst case).
 
 A signal or constant the format cannot hold is a :class:`ConfigError`
-naming the config field, its value, the signal, its range and the format.
+naming the config field that sets the offending range (found by
+sensitivity, :mod:`codegen.kernels.rangecause`), its value, the signal, its
+range, the format and what to change.
 """
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 
 from codegen.errors import ConfigError
 from codegen.kernels.consts import Const, guard_limits, in_format
+from codegen.kernels.rangecause import advice
 from codegen.kernels.trig import sincos_constants
 from codegen.model import Model
 from codegen.numfmt import NumberFormat, number_format
 from codegen.numfmt.scaling import BaseRanges, RepresentationError, Signal
 
-__all__ = ["step_format", "motor_ranges", "CONST_FIELDS"]
+__all__ = ["step_format", "range_error", "motor_ranges", "CONST_FIELDS"]
 
 #: the config field each constant comes from (named by a representation error)
 CONST_FIELDS: dict[str, str] = {
@@ -71,11 +74,13 @@ def _value(model: Model, field: str) -> object:
     return obj
 
 
-def step_format(model: Model, consts: Iterable[Const], extra: Iterable[Signal] = ()) -> tuple[
-        NumberFormat, tuple[Const, ...]]:
-    """(the step's number format, its constants in that format) from float64 constants ``consts`` and
-    the topology's ``extra`` signal ranges (its cost bound).  ConfigError if the format cannot hold them."""
-    consts = list(consts)
+ConstsOf = Callable[[Model], Iterable[Const]]
+ExtraOf = Callable[[Model], Iterable[Signal]]
+
+
+def _choose(model: Model, consts: list[Const], extra: Iterable[Signal]) -> NumberFormat:
+    """The step's number format for ``consts`` and the ``extra`` ranges (RepresentationError if it
+    cannot hold them)."""
     c = model.controller
     base, sigs = motor_ranges(model)
     # the sin/cos constants' precision is the approximation's (a tested property), not checked per constant
@@ -83,10 +88,44 @@ def step_format(model: Model, consts: Iterable[Const], extra: Iterable[Signal] =
     sigs += [Signal(k.name, k.unit, abs(float(k.value)), CONST_FIELDS.get(k.name, "controller.number_format"),
                     exact=k.name not in approximation) for k in consts]
     sigs += list(extra)
+    return number_format(c.number_format).for_step(sigs, base, c.fixed_q)
+
+
+def step_format(model: Model, consts: Iterable[Const] | ConstsOf,
+                extra: Iterable[Signal] | ExtraOf = ()) -> tuple[NumberFormat, tuple[Const, ...]]:
+    """(the step's number format, its constants in that format) from float64 constants ``consts`` and
+    the topology's ``extra`` signal ranges (its cost bound), each given as values or as the function
+    that gives them for a model.  ConfigError if the format cannot hold them (:func:`range_error`;
+    given as functions, the error can name the field that sets the range and the value that fits)."""
+    values = list(consts(model) if callable(consts) else consts)
     try:
-        nf = number_format(c.number_format).for_step(sigs, base, c.fixed_q)
+        nf = _choose(model, values, extra(model) if callable(extra) else extra)
     except RepresentationError as exc:
-        field = "controller.fixed_q" if c.fixed_q is not None else exc.field
-        raise ConfigError(model.source, field, _value(model, field),
-                          f"{exc} ({c.number_format} format; widen the range or change the config)") from None
-    return nf, in_format(nf, consts)
+        raise range_error(model, exc, extra if callable(extra) else None,
+                          consts if callable(consts) else None) from None
+    return nf, in_format(nf, values)
+
+
+def range_error(model: Model, exc: RepresentationError, extra_of: ExtraOf | None = None,
+                consts_of: ConstsOf | None = None) -> ConfigError:
+    """The one-line ConfigError of a signal or constant the format cannot hold: it names the config field
+    that sets the offending range (found by sensitivity over the step's range signals, the motor ranges
+    and ``extra_of(model)``: :mod:`codegen.kernels.rangecause`) and says what to change (with
+    ``consts_of`` and ``extra_of``: the largest value of that field the format holds); under a global
+    Q it names ``controller.fixed_q``."""
+    c = model.controller
+
+    def ranges_of(m: Model) -> list[Signal]:
+        return motor_ranges(m)[1] + list(extra_of(m) if extra_of is not None else ())
+
+    def fits(m: Model) -> bool:
+        assert consts_of is not None and extra_of is not None
+        try:
+            _choose(m, list(consts_of(m)), extra_of(m))
+        except (ArithmeticError, ValueError):  # RepresentationError, or a model the constants reject
+            return False
+        return True
+
+    named, text = advice(model, exc, ranges_of, fits if consts_of is not None and extra_of is not None else None)
+    field = "controller.fixed_q" if c.fixed_q is not None else named or exc.field
+    return ConfigError(model.source, field, _value(model, field), f"{exc} ({c.number_format} format): {text}")

@@ -49,10 +49,21 @@ INT32_MIN, INT32_MAX = -(2**31), 2**31 - 1
 
 
 class RepresentationError(ValueError):
-    """A signal or constant of the step cannot be represented in the fixed-point format."""
+    """A signal or constant of the step cannot be represented in the fixed-point format.
 
-    def __init__(self, signal: str, field: str, text: str) -> None:
+    ``signal``, ``field``: the offending value's name and the config field it comes from.  What a fix
+    must achieve: ``culprit`` is the range signal that has to shrink (the offending range itself; for
+    a constant left with too few bits, the largest scaled range, which set the resolution, when
+    shrinking it could free the bits; else None) and ``limit_abs`` the largest ``culprit.max_abs``
+    (SI) that would fit, everything else equal (an estimate: the bases move with the ranges).
+    ``bits_short``: for a constant, the significant bits it lacks; ``max_abs``: the offending value's
+    largest magnitude (SI).
+    """
+
+    def __init__(self, signal: str, field: str, text: str, culprit: Signal | None = None,
+                 limit_abs: float | None = None, bits_short: int = 0, max_abs: float = math.nan) -> None:
         self.signal, self.field = signal, field
+        self.culprit, self.limit_abs, self.bits_short, self.max_abs = culprit, limit_abs, bits_short, max_abs
         super().__init__(text)
 
 
@@ -129,20 +140,27 @@ def _int_bits(pu: float) -> int:
     return max(0, math.ceil(math.log2(pu))) if pu > 0 else 0
 
 
-def _check(s: Signal, sc: Scaling) -> None:
-    """RepresentationError if ``s`` does not fit ``sc`` (margin 2) or, as a constant, keeps too few bits."""
+def _check(s: Signal, sc: Scaling, widest: Signal | None = None) -> None:
+    """RepresentationError if ``s`` does not fit ``sc`` (margin 2) or, as a constant, keeps too few bits
+    (``widest``: the largest scaled range signal, the one that set the fractional bits)."""
     fmt = sc.describe(s.unit)
     unit = f" {s.unit}" if s.unit else ""
     if s.max_abs * 2.0 > sc.largest(s.unit):
         raise RepresentationError(s.name, s.field, (
             f"signal {s.name} (|x| up to {s.max_abs:.6g}{unit}, with margin 2: {2 * s.max_abs:.6g}) does not fit "
-            f"{fmt} (|x| < {sc.largest(s.unit):.6g}{unit})"))
+            f"{fmt} (|x| < {sc.largest(s.unit):.6g}{unit})"), None if s.exact else s, sc.largest(s.unit) / 2.0,
+            max_abs=s.max_abs)
     if s.exact and s.max_abs > 0.0:
         counts = s.max_abs / sc.resolution(s.unit)
         if counts < 2.0 ** (MIN_CONST_BITS - 1):
+            short = (MIN_CONST_BITS - 1) - math.floor(math.log2(max(counts, 2.0 ** -60)))
+            # per-signal formats: a smaller widest range leaves more fractional bits, up to MAX_FRAC_BITS
+            freeable = sc.mode == "per-signal" and widest is not None and sc.frac_bits + short <= MAX_FRAC_BITS
             raise RepresentationError(s.name, s.field, (
                 f"constant {s.name} = {s.max_abs:.6g}{unit} keeps {max(counts, 0):.3g} counts "
-                f"(< 2^{MIN_CONST_BITS - 1}) in {fmt} (resolution {sc.resolution(s.unit):.3g}{unit})"))
+                f"(< 2^{MIN_CONST_BITS - 1}) in {fmt} (resolution {sc.resolution(s.unit):.3g}{unit})"),
+                widest if freeable else None, math.ldexp(widest.max_abs, -short) if freeable and widest else None,
+                short, s.max_abs)
 
 
 #: how far the search moves each base exponent from its natural choice
@@ -193,12 +211,16 @@ def choose_scaling(signals: Iterable[Signal], base: BaseRanges, global_q: int | 
         sc = Scaling(g, exps, "per-signal")
         if g < MIN_FRAC_BITS:
             raise RepresentationError(worst.name, worst.field, (
-                f"signal {worst.name} (|x| up to {worst.max_abs:.6g} {worst.unit}) needs {need} integer bits "
-                f"of the per-unit format: {g} fractional bits left, fewer than {MIN_FRAC_BITS}"))
+                f"signal {worst.name} (|x| up to {worst.max_abs:.6g}{' ' + worst.unit if worst.unit else ''}) "
+                f"needs {need} integer bits "
+                f"of the per-unit format: {g} fractional bits left, fewer than {MIN_FRAC_BITS}"),
+                None if worst.exact else worst, math.ldexp(worst.max_abs, g - MIN_FRAC_BITS), max_abs=worst.max_abs)
+    ranges = [s for s in sigs if not s.exact and s.max_abs > 0]
+    widest = max(ranges, key=lambda s: s.max_abs / sc.largest(s.unit)) if ranges else None
     # the worst offender first: ranges beyond the format by how far, then constants by fewest counts
     for s in sorted(sigs, key=lambda s: (-(s.max_abs / sc.largest(s.unit)),
                                          s.max_abs / sc.resolution(s.unit) if s.exact and s.max_abs > 0 else 1e300)):
-        _check(s, sc)
+        _check(s, sc, widest)
     return sc
 
 

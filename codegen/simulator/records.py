@@ -165,6 +165,8 @@ SIM_TRACE = SimStruct("sim_trace_t", "sample-instant values and decision every t
     vector           u16   1  controller decision out.vector
     n_eval           u16   1  out.n_eval (candidates evaluated, Cal)
     fault            u16   1  out.fault bits
+    gates_off        u16   1  out.gates_off (1: the step asks for every switch off; it acts as the decision does, in [t_k+d, t_k+d+1))
+    inverter_open    u16   1  1: every switch was off during [t_k, t_k+1) (the gates_off of k-d), the currents in the diodes
     te_est_nm        f32   1  out.te_est_nm (controller torque estimate), N*m
     psi_est_wb       f32   1  out.psi_est_wb (controller flux estimate), Wb
 """)), pointers=True)

@@ -58,7 +58,9 @@ def emulated_instructions(model: Model, strategies: list[str], log: Callable[[st
     Each image, in every number format, replays the same ``N_BENCH`` states of the float32
     baseline's recorded trajectory (``fwdata.trajectory_states``; two-level: the conventional
     closed-loop run; three-level: the 27-MPDTC run at rated speed) and also runs the bit-exact self-test; a
-    mismatch or a digest disagreement is an error, never a number.  In the config's own number
+    mismatch or a digest disagreement is an error, never a number.  ``log`` gets a line per phase of
+    each image (project, build, QEMU run, digests, trace, pipeline model) and a heartbeat
+    every few seconds while one runs (``codegen.stages.progress``).  In the config's own number
     format, each strategy also gets its estimated Cortex-M7 cycles and their lower bound
     (``codegen.stages.cycles.strategy_cycles``, under ``"cycles"``; ``cycle_states`` bench states traced).
     """
@@ -82,7 +84,7 @@ def emulated_instructions(model: Model, strategies: list[str], log: Callable[[st
                     log(f"  {s} in {fmt}: not measured ({e})")
                     out[s][fmt] = {"error": str(e)}
                     continue
-                r = run_and_check(variant, tables, Path(tmp) / f"{s}-{fmt}", n_selftest=1000)
+                r = run_and_check(variant, tables, Path(tmp) / f"{s}-{fmt}", n_selftest=1000, log=log)
                 if r.mismatches or not r.digests_match:
                     raise EmulationError(f"{s} ({fmt}): emulated results differ from the reference "
                                          f"({r.mismatches} mismatches)")
@@ -91,7 +93,7 @@ def emulated_instructions(model: Model, strategies: list[str], log: Callable[[st
                 if fmt == own:
                     log(f"  {s} ({fmt}): tracing the step in unicorn, cycles from llvm-mca (Cortex-M7)")
                     out[s][fmt]["cycles"] = strategy_cycles(variant, tables, Path(tmp) / f"{s}-{fmt}" / "build" /
-                                                            "fw.elf", max_states=cycle_states)
+                                                            "fw.elf", max_states=cycle_states, log=log)
     return out
 
 

@@ -39,7 +39,7 @@ import re
 import shutil
 import struct
 import subprocess
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
@@ -50,6 +50,7 @@ import numpy as np
 from codegen.errors import MpcgenError
 from codegen.model import Model
 from codegen.stages.fwdata import N_BENCH, evenly_spaced
+from codegen.stages.progress import phase
 
 __all__ = ["MCA_ARGS", "CycleEstimate", "CycleError", "Elf", "StepTracer", "check_bound", "estimate_cycles", "mca_cycles",
            "llvm_mca", "model_bound", "op_totals", "overlap_bound", "strategy_cycles", "METHOD_NOTE"]
@@ -314,33 +315,42 @@ def _path_lines(blocks: list[tuple[int, int]], addresses: np.ndarray, asm: dict[
 
 
 def estimate_cycles(elf_path: Path, symbol: str, states: np.ndarray, expected: np.ndarray, *,
-                    max_states: int = 256, jobs: int = 4) -> CycleEstimate:
+                    max_states: int = 256, jobs: int = 4, log: Callable[[str], None] | None = None) -> CycleEstimate:
     """Estimated Cortex-M7 cycles of ``symbol(&in, &out)`` for each of at most ``max_states`` of
     ``states`` (input records in the step's format, evenly spaced), with ``expected`` the reference's
-    output records (same order) to compare the traced outputs with (a mismatch is a CycleError)."""
+    output records (same order) to compare the traced outputs with (a mismatch is a CycleError).
+    ``log``: progress lines of the trace and the pipeline model, a heartbeat every few seconds
+    (:func:`codegen.stages.progress.phase`)."""
     idx = evenly_spaced(np.arange(len(states)), max_states)
-    tracer = StepTracer(elf_path, symbol)
-    asm = disassemble(elf_path)
-    addresses = np.array(sorted(asm), dtype=np.int64)
-    out_size = expected.dtype.itemsize
     keys: list[str] = []
     paths: dict[str, list[str]] = {}
     n_instr = []
     mismatches = 0
-    for i in idx:
-        blocks, out = tracer.run(np.ascontiguousarray(states[i:i + 1]).tobytes(), out_size)
-        if out != np.ascontiguousarray(expected[i:i + 1]).tobytes():
-            mismatches += 1
-        key = hashlib.sha1(repr(blocks).encode()).hexdigest()
-        if key not in paths:
-            paths[key] = _path_lines(blocks, addresses, asm)
-        keys.append(key)
-        n_instr.append(len(paths[key]))
+    with phase(log, f"{symbol}: tracing {len(idx)} bench states in unicorn") as p:
+        tracer = StepTracer(elf_path, symbol)
+        asm = disassemble(elf_path)
+        addresses = np.array(sorted(asm), dtype=np.int64)
+        out_size = expected.dtype.itemsize
+        for done, i in enumerate(idx, 1):
+            blocks, out = tracer.run(np.ascontiguousarray(states[i:i + 1]).tobytes(), out_size)
+            if out != np.ascontiguousarray(expected[i:i + 1]).tobytes():
+                mismatches += 1
+            key = hashlib.sha1(repr(blocks).encode()).hexdigest()
+            if key not in paths:
+                paths[key] = _path_lines(blocks, addresses, asm)
+            keys.append(key)
+            n_instr.append(len(paths[key]))
+            p.note(f"{done}/{len(idx)} states, {len(paths)} distinct paths")
     if mismatches:
         raise CycleError(f"{symbol}: the traced step's outputs differ from the reference for {mismatches} of "
                          f"{len(idx)} states")
-    with ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
-        cyc = dict(zip(paths, pool.map(mca_cycles, paths.values())))
+    with phase(log, f"{symbol}: llvm-mca (Cortex-M7 model) on {len(paths)} distinct paths") as p, \
+            ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
+        cycles = []
+        for c in pool.map(mca_cycles, paths.values()):
+            cycles.append(c)
+            p.note(f"{len(cycles)}/{len(paths)} paths")
+        cyc = dict(zip(paths, cycles))
     return CycleEstimate(len(idx), len(paths), np.array([cyc[k] for k in keys], dtype=np.float64),
                          np.array(n_instr, dtype=np.float64))
 
@@ -409,17 +419,18 @@ def check_bound(symbol: str, est_cycles: np.ndarray, bound: np.ndarray) -> None:
                          f"{len(bound)} states: the essential operations are miscounted")
 
 
-def strategy_cycles(model: Model, tables: Any, elf_path: Path, *, n_bench: int = N_BENCH, max_states: int = 256) -> dict[str, Any]:
+def strategy_cycles(model: Model, tables: Any, elf_path: Path, *, n_bench: int = N_BENCH, max_states: int = 256,
+                    log: Callable[[str], None] | None = None) -> dict[str, Any]:
     """Estimate and bound of one strategy's image (``model`` the strategy's variant): the bench
     states the image embeds (the topology's trajectory, ``n_bench`` evenly spaced, in the step's
-    format), at most ``max_states`` of them traced.  JSON-ready figures."""
+    format), at most ``max_states`` of them traced.  JSON-ready figures; ``log``: progress lines."""
     from codegen.stages.fwdata import expected_outputs, in_step_format, trajectory_states
     from codegen.topology import topology_of
 
     topo = topology_of(model)
     states = in_step_format(model, tables, trajectory_states(model, n_bench))
     expected = expected_outputs(topo, tables, states)
-    est = estimate_cycles(elf_path, f"{model.prefix}_step", states, expected, max_states=max_states)
+    est = estimate_cycles(elf_path, f"{model.prefix}_step", states, expected, max_states=max_states, log=log)
     idx = evenly_spaced(np.arange(len(states)), max_states)
     totals = op_totals(topo.essential_ops(model, tables),
                        topo.op_multiplicities(model, tables, states[idx], expected[idx]))

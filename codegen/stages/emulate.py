@@ -19,6 +19,8 @@ import re
 import signal
 import subprocess
 import tempfile
+import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -38,6 +40,7 @@ from codegen.stages.firmware import (
     write_firmware_project,
 )
 from codegen.stages.fwdata import N_BENCH, layouts
+from codegen.stages.progress import phase
 
 #: SysTick clock of mps2-an500 (processor clock, CLKSOURCE=1).
 SYSTICK_HZ = 25_000_000
@@ -70,8 +73,44 @@ def kill_group(proc: subprocess.Popen[Any]) -> None:
     proc.wait()
 
 
-def run_qemu(elf: Path, *, timeout_s: float = 120.0, icount_shift: int = ICOUNT_SHIFT) -> QemuRun:
-    """Run ``elf`` until it exits (semihosting) or ``timeout_s`` passes; QEMU is always ended."""
+def uart_progress(text: str) -> str:
+    """How far a running image got, from its console so far: the test sets finished, the one running
+    (with the states stepped, where the set prints its cycles)."""
+    done: list[str] = []
+    running, n, stepped = "", 0, 0
+    for line in text.splitlines():
+        word, _, rest = line.partition(" ")
+        kv = dict(_KV.findall(rest))
+        if word == "SET":
+            running, n, stepped = kv.get("name", "?"), int(kv.get("n", "0")), 0
+        elif word == "CYC":
+            stepped += len(rest.split())
+        elif word == "SUMMARY":
+            done.append(kv.get("set", "?"))
+            running = ""
+    parts = [f"sets done: {', '.join(done)}" if done else "no set done yet"]
+    if running:
+        parts.append(f"running set {running}" + (f" ({stepped}/{n} states)" if stepped else ""))
+    return "; ".join(parts)
+
+
+def build_progress(project: Path) -> str:
+    """How far ``make`` got in a firmware project: the objects built of its sources (the Makefile's
+    ``SRCS``, built in order into ``build/``), the one being compiled, or the link."""
+    text = (Path(project) / "Makefile").read_text()
+    m = re.search(r"^SRCS = ((?:.*\\\n)*.*)$", text, re.M)
+    srcs = m.group(1).replace("\\\n", " ").split() if m else []
+    built = [src for src in srcs if (Path(project) / "build" / src).with_suffix(".o").exists()]
+    if len(built) < len(srcs):
+        pending = next(src for src in srcs if src not in built)
+        return f"{len(built)}/{len(srcs)} objects built, compiling {pending}"
+    return f"{len(srcs)}/{len(srcs)} objects built, linking"
+
+
+def run_qemu(elf: Path, *, timeout_s: float = 120.0, icount_shift: int = ICOUNT_SHIFT,
+             progress: Callable[[str], None] | None = None, poll_s: float = 1.0) -> QemuRun:
+    """Run ``elf`` until it exits (semihosting) or ``timeout_s`` passes; QEMU is always ended.
+    ``progress``: called every ``poll_s`` seconds with how far the image got (:func:`uart_progress`)."""
     require_tools((QEMU,))
     elf = Path(elf)
     if not elf.is_file():
@@ -82,10 +121,18 @@ def run_qemu(elf: Path, *, timeout_s: float = 120.0, icount_shift: int = ICOUNT_
                                 stdout=subprocess.PIPE, stderr=subprocess.STDOUT, start_new_session=True)
         timed_out = False
         out = b""
+        deadline = time.monotonic() + timeout_s
         try:
-            out, _ = proc.communicate(timeout=timeout_s)
-        except subprocess.TimeoutExpired:
-            timed_out = True
+            while True:
+                try:
+                    out, _ = proc.communicate(timeout=max(0.0, min(poll_s, deadline - time.monotonic())))
+                    break
+                except subprocess.TimeoutExpired:
+                    if time.monotonic() >= deadline:
+                        timed_out = True
+                        break
+                    if progress is not None and uart.exists():
+                        progress(uart_progress(uart.read_text(errors="replace")))
         finally:
             kill_group(proc)
             if proc.stdout is not None:
@@ -205,7 +252,8 @@ class StrategyCounts:
 
 
 def run_and_check(model: Model, tables: Any, workdir: Path, *, n_selftest: int = 10000,
-                  n_bench: int = N_BENCH, icount_shift: int = ICOUNT_SHIFT, timeout_s: float = 300.0) -> StrategyCounts:
+                  n_bench: int = N_BENCH, icount_shift: int = ICOUNT_SHIFT, timeout_s: float = 300.0,
+                  log: Callable[[str], None] | None = None) -> StrategyCounts:
     """Write, build and run one qemu-m7 image; check it against the reference; count instructions.
 
     The firmware compares every output with its embedded expected outputs;
@@ -213,13 +261,20 @@ def run_and_check(model: Model, tables: Any, workdir: Path, *, n_selftest: int =
     from the Python reference and compares it with the firmware's digests.
     Either topology (``tables``: TwoLevelTables or ThreeLevelTables to match
     ``model.inverter.topology``); the bench set is the topology's recorded
-    trajectory (three-level: the 27-MPDTC run at rated speed).
+    trajectory (three-level: the 27-MPDTC run at rated speed).  ``log``: progress lines of each
+    phase (writing, building, the QEMU run, the digest check), with a heartbeat every few seconds
+    (:func:`codegen.stages.progress.phase`).
     """
     inp, out = layouts(model)
     workdir = Path(workdir)
-    write_firmware_project(model, tables, EMULATED_BOARD, workdir, n_selftest, n_bench=n_bench)
-    build = build_firmware(workdir, EMULATED_BOARD)
-    run = run_qemu(build.image, timeout_s=timeout_s, icount_shift=icount_shift)
+    label = f"{tables.strategy} ({model.controller.number_format})"
+    with phase(log, f"{label}: writing the firmware project (reference outputs of {n_selftest} self-test "
+                    f"and {n_bench} bench states)"):
+        write_firmware_project(model, tables, EMULATED_BOARD, workdir, n_selftest, n_bench=n_bench)
+    with phase(log, f"{label}: compiling and linking the image (make)", probe=lambda: build_progress(workdir)):
+        build = build_firmware(workdir, EMULATED_BOARD)
+    with phase(log, f"{label}: running the image in QEMU") as p:
+        run = run_qemu(build.image, timeout_s=timeout_s, icount_shift=icount_shift, progress=p.note)
     if run.timed_out:
         raise EmulationError(f"QEMU did not finish within {timeout_s} s (killed); last output: {run.uart[-300:]!r}")
     rep = parse_console(run.uart)
@@ -227,12 +282,13 @@ def run_and_check(model: Model, tables: Any, workdir: Path, *, n_selftest: int =
     if rep.hello.get("config") != model.config_hash():
         raise EmulationError(f"image reports config {rep.hello.get('config')}, expected {model.config_hash()}")
     ok = True
-    for ts in make_test_sets(model, tables, n_selftest, n_bench):
-        got = rep.sets.get(ts.name)
-        if got is None:
-            raise EmulationError(f"no SUMMARY for set {ts.name}; output ends {run.uart[-300:]!r}")
-        ok &= (got.n == len(ts.states) and got.crc_in == inp.crc(ts.states)
-               and got.crc_out == out.crc(ts.expected))
+    with phase(log, f"{label}: checking the image's digests against the reference"):
+        for ts in make_test_sets(model, tables, n_selftest, n_bench):
+            got = rep.sets.get(ts.name)
+            if got is None:
+                raise EmulationError(f"no SUMMARY for set {ts.name}; output ends {run.uart[-300:]!r}")
+            ok &= (got.n == len(ts.states) and got.crc_in == inp.crc(ts.states)
+                   and got.crc_out == out.crc(ts.expected))
     bench = rep.sets.get("bench")
     instr = ticks_to_instructions(bench.cycles if bench else [0], icount_shift)
     return StrategyCounts(tables.strategy, sum(s.n for s in rep.sets.values()),

@@ -193,9 +193,13 @@ def _closed_loop(model_fx: Model, model_32: Model, strategies: list[str], log: L
             m_32 = runs_32[run]
             row = {}
             for k in RIPPLE_KEYS:
-                if k in m_fx and k in m_32:
-                    a, b = float(m_fx[k]), float(m_32[k])
-                    row[k] = {QUANTISED: a, FLOAT_CONTROLLER: b, "ratio": a / b if b else (1.0 if a == 0 else float("inf"))}
+                if k not in m_fx or k not in m_32:
+                    continue
+                if m_fx[k] is None or m_32[k] is None:  # a metric the run could not compute (its reason is there)
+                    row[k] = {QUANTISED: m_fx[k], FLOAT_CONTROLLER: m_32[k], "ratio": None}
+                    continue
+                a, b = float(m_fx[k]), float(m_32[k])
+                row[k] = {QUANTISED: a, FLOAT_CONTROLLER: b, "ratio": a / b if b else (1.0 if a == 0 else float("inf"))}
             out[s][run] = row
     return out
 

@@ -39,8 +39,9 @@ def report_name(model: Model) -> str:
     return f"{model.prefix}_quantisation.md"
 
 
-def _g(x: float, spec: str = ".4g") -> str:
-    return "n/a" if x != x else format(x, spec)
+def _g(x: float | None, spec: str = ".4g") -> str:
+    """A number for the tables; ``n/a`` for NaN and for a metric the run could not compute (None)."""
+    return "n/a" if x is None or x != x else format(x, spec)
 
 
 def _pct(x: float) -> str:

@@ -5,7 +5,9 @@ states ((a) the variant's own closed-loop run, (b) random states over the
 operating range, (c) adversarial states), run both implementations over the
 whole batch and compare every output field's bits.  On a mismatch the first
 offending state is printed with every intermediate value from both sides.
-Each result names the C it is about by C hash (``codegen.manifest``): the
+Before anything runs, :func:`check_verify_memory` estimates the memory the
+run takes (:class:`VerifyMemory`) and refuses one that does not fit the
+machine or the process's address-space limit.  Each result names the C it is about by C hash (``codegen.manifest``): the
 host C compiled and compared, and the C ``generate`` writes for the config's
 target (the same arithmetic: target profiles differ only in placement
 attributes and comments).  Topology-agnostic: everything topology-specific
@@ -118,9 +120,112 @@ def workers() -> int:
     return int(text)
 
 
+def chunking(total: int) -> tuple[int, int]:
+    """(processes, states per chunk) :func:`compare_batches` uses for ``total`` states."""
+    n_jobs = workers() if total >= PARALLEL_MIN_STATES else 1
+    return n_jobs, CHUNK if n_jobs == 1 else min(CHUNK, max(10_000, -(-total // (4 * n_jobs))))
+
+
+# ---------------------------------------------------------------- memory, estimated before anything runs
+
+#: float64 temporaries per state while the random states are drawn (a few columns at a time)
+DRAW_BYTES_PER_STATE = 24
+#: working set of one chunk in the process that runs the reference on it, per state, in units of
+#: (input + output record): the candidates' intermediate columns (measured: 3-8; 10 kept as margin)
+CHUNK_WORK_RECORDS = 10
+#: what the main process maps beyond its arrays once it runs (the host libraries, the pool's threads
+#: and their malloc arenas), on top of what it maps when the estimate is made
+RUNTIME_BYTES = 512 * 1024**2
+#: closed-loop phase, per simulated period, in units of the shared trace record (the topology's own
+#: trace fields, the recorded inputs of every run it makes)
+CLOSED_LOOP_TRACE_RECORDS = 4
+
+
+@dataclass(frozen=True)
+class VerifyMemory:
+    """Estimated memory of verifying one strategy over ``states`` states (every figure in bytes).
+
+    The main process holds the states twice (the parts, then their concatenation:
+    ``2 * in_bytes``), the float64 columns of the random draw, and with a process pool every chunk's
+    reference outputs until they are compared (``out_bytes``, the worst case); each process working on
+    a chunk holds ``chunk_bytes``; the closed-loop run before them holds its trace.
+    """
+
+    strategy: str
+    states: int
+    jobs: int
+    chunk: int
+    in_bytes: int
+    out_bytes: int
+    closed_loop_bytes: int
+
+    @property
+    def per_state(self) -> int:
+        """Bytes the main process holds per state."""
+        return 2 * self.in_bytes + DRAW_BYTES_PER_STATE + (self.out_bytes if self.jobs > 1 else 0)
+
+    @property
+    def chunk_bytes(self) -> int:
+        """Working set of one chunk (reference outputs and intermediates, C outputs, the comparison)."""
+        return self.chunk * CHUNK_WORK_RECORDS * (self.in_bytes + self.out_bytes)
+
+    @property
+    def main_bytes(self) -> int:
+        """Peak of the main process (its address space)."""
+        return self.states * self.per_state + self.chunk_bytes + self.closed_loop_bytes + RUNTIME_BYTES
+
+    @property
+    def total_bytes(self) -> int:
+        """Peak of every process together (the machine's memory): the workers' chunks added."""
+        return self.main_bytes + (self.jobs * self.chunk_bytes if self.jobs > 1 else 0)
+
+    def describe(self) -> str:
+        pool = f", {self.jobs} processes" if self.jobs > 1 else ""
+        outs = f" + its {self.out_bytes}-byte output held for the pool" if self.jobs > 1 else ""
+        return (f"{self.states} states x {self.per_state} bytes (the {self.in_bytes}-byte input record twice"
+                f"{outs}) + chunks of {self.chunk} states{pool}")
+
+
+def verify_memory(model: Model, n_states: int, closed_loop: bool = True) -> VerifyMemory:
+    """The memory estimate of ``verify_strategy(model, n_states, closed_loop=...)`` (its strategy's
+    record sizes in its number format, its chunking)."""
+    from codegen.simulator.driver import n_periods
+    from codegen.simulator.memory import bytes_per_period
+    from codegen.simulator.records import SIM_TRACE
+    from codegen.stages.fwdata import layouts
+
+    inp, out = layouts(model)
+    jobs, chunk = chunking(n_states)
+    loop = n_periods(model) * CLOSED_LOOP_TRACE_RECORDS * (bytes_per_period(SIM_TRACE) + inp.dtype.itemsize) \
+        if closed_loop else 0
+    return VerifyMemory(model.controller.strategy, n_states, jobs, chunk, inp.dtype.itemsize, out.dtype.itemsize,
+                        loop)
+
+
+def check_verify_memory(model: Model, strategies: list[str], n_states: int, closed_loop: bool = True,
+                        option: str = "--states") -> list[VerifyMemory]:
+    """Refuse (UsageError, exit 2) a verification whose estimated memory (:func:`verify_memory`, the
+    largest of its strategies: they run one after the other) exceeds what this process may still
+    allocate (:func:`codegen.simulator.memory.memory_room`: the address-space limit for the main
+    process, the available memory for every process together).  Returns the estimates."""
+    from codegen.simulator.memory import gb, memory_room
+
+    estimates = [verify_memory(model.with_controller(strategy=s), n_states, closed_loop) for s in strategies]
+    worst = max(estimates, key=lambda e: e.total_bytes)
+    for what, room, own in memory_room():
+        need = worst.main_bytes if own else worst.total_bytes
+        if need > room:
+            fixed = need - n_states * worst.per_state
+            fits = max(0, (room - fixed) // worst.per_state)
+            raise UsageError(
+                f"{option} = {n_states}: verifying {worst.strategy} would take about {gb(need)} "
+                f"({worst.describe()}), more than {what} leaves ({gb(room)}): at most about {fits} states fit")
+    return estimates
+
+
 def compare_batches(strategy: str, parts: dict[str, np.ndarray], ref_step: Callable[[np.ndarray], np.ndarray],
                     c_step: Callable[[np.ndarray], np.ndarray], log: Callable[[str], None], t0: float) -> StrategyResult:
-    """Run both implementations over every state (in chunks) and compare bits.
+    """Run both implementations over every state (in chunks of :func:`chunking`) and compare bits.
 
     The Python reference, the slow side, runs in a process pool on every core
     (``ref_step`` must be picklable: a module function, or a partial of one);
@@ -128,8 +233,7 @@ def compare_batches(strategy: str, parts: dict[str, np.ndarray], ref_step: Calla
     """
     states = np.concatenate(list(parts.values()))
     total = len(states)
-    n_jobs = workers() if total >= PARALLEL_MIN_STATES else 1
-    size = CHUNK if n_jobs == 1 else min(CHUNK, max(10_000, -(-total // (4 * n_jobs))))
+    n_jobs, size = chunking(total)
     bounds = [(lo, min(lo + size, total)) for lo in range(0, total, size)]
     mismatches = 0
     per_field: dict[str, int] = {}

@@ -30,10 +30,15 @@ from hil.session import Session
 
 from conftest import require_tool
 
+#: a short reversal under +-10 N*m; it trips the current guard in about 7 % of its periods, so the safe state
+#: is the short circuit (the zero vector): with gates off both plants open the inverter on every trip and the
+#: float32 board and the float64 host drift apart on the mean torque (0.272 against the 0.260 allowed)
 SHORT_2L = {"scenario.duration_s": 0.2, "scenario.speed_ref_rpm": [[0.0, 500.0], [0.1, -500.0]],
-            "scenario.load_nm": [[0.0, 10.0], [0.05, -10.0]], "controller.tables": "published"}
+            "scenario.load_nm": [[0.0, 10.0], [0.05, -10.0]], "controller.tables": "published",
+            "controller.fault_action": "active-short-circuit"}
 SHORT_2L_ARGS = ["--set", "scenario.duration_s=0.2", "--set", "scenario.speed_ref_rpm=[[0.0,500.0],[0.1,-500.0]]",
-                 "--set", "scenario.load_nm=[[0.0,10.0],[0.05,-10.0]]", "--set", "controller.tables=published"]
+                 "--set", "scenario.load_nm=[[0.0,10.0],[0.05,-10.0]]", "--set", "controller.tables=published",
+                 "--set", "controller.fault_action=active-short-circuit"]
 FIXED = {"controller.number_format": "fixed"}
 CASES = [(SPMSM, "s2", SHORT_2L), (TLEVEL, "mpdtc27", {"scenario.duration_s": 0.1})]
 #: the same, plus both in fixed point (the plant feeds the step through MPC_ENCODE_* / MPC_DECODE_*)

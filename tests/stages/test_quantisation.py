@@ -118,3 +118,23 @@ def test_generate_writes_the_report_for_fixed_point_only(tmp_path):
     assert "## Strategy s1" in md and "## Strategy s2" not in md
     assert main([*args, "--number-format", "fixed", "-o", str(tmp_path / "q2")]) == 0
     assert (tmp_path / "q2" / "ipmsm_quantisation.md").read_text() == md
+
+
+@pytest.mark.parametrize("sets", [["controller.dt_s=1e-3"], ["motor.ld_h=1e-5", "motor.lq_h=1e-5"]],
+                         ids=["slow-period", "tiny-inductance"])
+def test_generate_fixed_where_a_closed_loop_metric_cannot_be_computed(tmp_path, sets):
+    """Configs float32 accepts (second user trial: a TypeError on a closed-loop metric the run could not
+    compute, None in its JSON): the fixed-point C and its quantisation report are written; a metric that is
+    None is shown as n/a, never formatted as a number."""
+    argv = ["generate", str(SPMSM), "--number-format", "fixed", "-o", str(tmp_path), "-q"]
+    for s in sets:
+        argv += ["--set", s]
+    assert main(argv) == 0
+    text = next(tmp_path.glob("*_quantisation.md")).read_text()
+    assert "| scenario | T_rip_RMSE_nm |" in text and "None" not in text
+
+
+def test_a_metric_none_is_na_in_the_report():
+    from codegen.stages.quantreport import _g
+
+    assert _g(None) == "n/a" and _g(float("nan")) == "n/a" and _g(0.5) == "0.5"

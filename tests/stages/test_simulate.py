@@ -33,7 +33,7 @@ def test_simulate_writes_metrics_and_plots(tmp_path, capsys, cfg, duration):
     # each simplification evaluates fewer candidates (seed Table 9 ordering)
     assert cal["conventional"] > cal["s1"] > cal["s2"] > cal["s3"] > 0
     pngs = sorted(p.name for p in plots.glob("*.png"))
-    assert len(pngs) == 5 * len(TWO_LEVEL) and all((plots / p).stat().st_size > 10_000 for p in pngs)
+    assert len(pngs) == 6 * len(TWO_LEVEL) and all((plots / p).stat().st_size > 10_000 for p in pngs)
 
 
 def test_threshold_sweep(tmp_path, capsys):

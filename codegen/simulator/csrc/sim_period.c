@@ -137,7 +137,8 @@ void sim_period_sample(const sim_params_t *p, const sim_state_t *s, pmsm_state_t
 
 void sim_period_record(const sim_trace_t *tr, long j, const sim_params_t *p, const sim_state_t *s,
                        const pmsm_state_t *x, const sim_sample_t *v, uint16_t vector,
-                       uint16_t n_eval, uint16_t fault, float te_est_nm, float psi_est_wb)
+                       uint16_t n_eval, uint16_t fault, uint16_t gates_off, int open,
+                       float te_est_nm, float psi_est_wb)
 {
     if (tr->t_s != NULL) tr->t_s[j] = (double)s->k * p->dt_s;
     if (tr->speed_ref_rad_s != NULL) tr->speed_ref_rad_s[j] = v->w_ref;
@@ -158,6 +159,8 @@ void sim_period_record(const sim_trace_t *tr, long j, const sim_params_t *p, con
     if (tr->vector != NULL) tr->vector[j] = vector;
     if (tr->n_eval != NULL) tr->n_eval[j] = n_eval;
     if (tr->fault != NULL) tr->fault[j] = fault;
+    if (tr->gates_off != NULL) tr->gates_off[j] = gates_off;
+    if (tr->inverter_open != NULL) tr->inverter_open[j] = (uint16_t)(open ? 1 : 0);
     if (tr->te_est_nm != NULL) tr->te_est_nm[j] = te_est_nm;
     if (tr->psi_est_wb != NULL) tr->psi_est_wb[j] = psi_est_wb;
 }

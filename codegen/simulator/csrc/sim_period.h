@@ -29,10 +29,13 @@
  *     SIM_MOTOR_INPUTS, sim_motor_inputs.h; the rest: the topology's sim .c).
  *  5. Record the sample instant and the decision.  sim_period_record
  *  6./7. The topology's decision queue (actuation delay d = delay_periods:
- *     the decision of k acts during [t_k+d, t_k+d+1)) and plant integration
- *     over [t_k, t_k+1) with its dead time and device drops (sim_inverter.h),
- *     load torque load_nm[k] (ignored when the speed is imposed); the plant
- *     state at t_k+1 - tau is kept for the next period's samples.
+ *     the decision of k acts during [t_k+d, t_k+d+1), and so does the
+ *     step's gates_off of k: 1 opens the inverter, every switch off, the
+ *     currents in the diodes, sim_inverter.h "The open inverter") and plant
+ *     integration over [t_k, t_k+1) with its dead time and device drops
+ *     (sim_inverter.h), load torque load_nm[k] (ignored when the speed is
+ *     imposed); the plant state at t_k+1 - tau is kept for the next
+ *     period's samples.
  *  Commit: the plant state, the mechanical angle, the encoder count, the
  *  kept samples, the PI integrator, k += 1.                  sim_period_commit
  *
@@ -104,10 +107,11 @@ void sim_period_sample(const sim_params_t *p, const sim_state_t *s, pmsm_state_t
 
 /* Step 5, shared trace members of period j: the sample instant (plant
  * torque and flux of x), what the controller saw, and its vector, n_eval,
- * fault and estimates. */
+ * fault, gates_off and estimates; open: the inverter open during [t_k, t_k+1). */
 void sim_period_record(const sim_trace_t *tr, long j, const sim_params_t *p, const sim_state_t *s,
                        const pmsm_state_t *x, const sim_sample_t *v, uint16_t vector,
-                       uint16_t n_eval, uint16_t fault, float te_est_nm, float psi_est_wb);
+                       uint16_t n_eval, uint16_t fault, uint16_t gates_off, int open,
+                       float te_est_nm, float psi_est_wb);
 
 /* 1 if every motor state value is finite. */
 int sim_period_finite(const pmsm_state_t *x);

@@ -33,6 +33,8 @@ typedef float sim_real_t;
 #define SIM_CEIL ceilf
 /* relative tolerance of a piece's sub-step count (sim_inverter_substeps): a few float ulps */
 #define SIM_SUBSTEP_TOL 1e-4f
+/* relative tolerance of a zero phase current of the open inverter (sim_inverter.h): a few float ulps */
+#define SIM_ZERO_TOL 1e-4f
 /* most sub-steps of one piece (a 16-bit int holds it) */
 #define SIM_SUBSTEP_MAX 10000
 #else
@@ -45,6 +47,7 @@ typedef double sim_real_t;
 #define SIM_FMOD fmod
 #define SIM_CEIL ceil
 #define SIM_SUBSTEP_TOL 1e-9
+#define SIM_ZERO_TOL 1e-9
 #define SIM_SUBSTEP_MAX 100000000
 #endif
 

@@ -213,7 +213,7 @@ def derive_three_level(model: Model) -> ThreeLevelTables:
             idx.append(index[g])
         row_groups.append(tuple(idx))
     ux, uy = vv.vector_voltages()
-    nf, consts = step_format(model, _constants(model), cost_bounds(model))
+    nf, consts = step_format(model, _constants, cost_bounds)
     f = nf.const
     pat = io_patterns()
     seq = []

@@ -1,20 +1,32 @@
 """PNG plots of a closed-loop three-level run (matplotlib, Agg canvas, no GUI).
 
-Plot list: docs/simulation.md, last paragraph (torque and
-reference, flux magnitude, phase currents, and for three-level V_o and u_ab).
-Figures use the object-oriented API (codegen/plotting.py).
+Plot list: docs/simulation.md "Plots" (speed, torque and reference, flux
+magnitude, flux locus, phase currents, spectrum of i_a, and for the
+three-level inverter V_o and u_ab).  Figures use the object-oriented API
+(codegen/plotting.py, codegen/simulator/figures.py).  The zooms, the locus
+window and the spectrum are those of the THD the run's metric result reports
+(``window["THD_ia_percent"]``).
 """
 from __future__ import annotations
 
-import math
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from codegen.metrics import thd_window, window_slice
+from codegen.metrics import sample_time
 from codegen.model import Model
-from codegen.plotting import new_figure, plot_lines, plot_phase_currents, plot_torque, save_figure
+from codegen.plotting import heading, new_figure, plot_lines, save_figure, span
+from codegen.simulator.figures import (
+    plot_flux_locus,
+    plot_phase_currents,
+    plot_spectrum,
+    plot_speed,
+    plot_torque,
+    run_span,
+    thd_span,
+    zoom_slice,
+)
 
 if TYPE_CHECKING:  # pragma: no cover
     from codegen.topologies.ttype.sim import Trace
@@ -36,47 +48,41 @@ def uab_steps(trace: Trace, sl: slice) -> tuple[np.ndarray, np.ndarray]:
     return t, v
 
 
-def plot_three_level(trace: Trace, model: Model, strategy: str, speed_rpm: float,
-                     outdir: str | Path) -> list[Path]:
-    """Write ``<strategy>_<speed>rpm_{torque,flux,currents,vo,uab}.png`` into outdir.
+def plot_three_level(trace: Trace, model: Model, tag: str, run: str, outdir: str | Path,
+                     metrics: dict[str, Any]) -> list[Path]:
+    """Write ``<tag>_{speed,torque,flux,locus,currents,spectrum,vo,uab}.png`` into outdir.
 
-    The zooms (currents over two fundamental periods; u_ab over 10 control
-    periods and over one fundamental period) are taken at the end of the
-    THD window (:func:`codegen.metrics.thd_window`), or the end of the run.
-    Returns the paths written.
+    ``tag`` names the files (strategy and run), ``run`` describes the run in
+    every title; ``metrics``: the metric result the table reports for it
+    (the spectrum, the locus window and the zooms use its THD window and
+    fundamental: currents over two fundamental periods, u_ab over 10 control
+    periods and over one fundamental period, each ending at the end of the
+    THD window, or of the run when there is none).  Returns the paths written.
     """
     out = Path(outdir)
     out.mkdir(parents=True, exist_ok=True)
-    tag = f"{strategy}_{int(round(speed_rpm))}rpm"
-    title = f"{model.name}: {strategy}, {speed_rpm:g} r/min"
+    title = f"{model.name}: {run}"
     t = trace.t_s
     dt = trace.dt_s
-    paths: list[Path] = []
-
-    tw = thd_window(trace, model)  # type: ignore[arg-type]
-    f1 = 0.0
-    if tw is not None:
-        sl = window_slice(dt, tw[0], tw[1], trace.n)
-        f1 = model.motor.pole_pairs * float(np.mean(np.abs(trace.omega_m_rad_s[sl]))) / (2.0 * math.pi)
-        t_end = tw[1]
-    else:
-        t_end = trace.n * dt
-    k_end = min(trace.n, int(round(t_end / dt)))
-
-    paths.append(plot_torque(out / f"{tag}_torque.png", title, trace))
-    paths.append(plot_lines(out / f"{tag}_flux.png", f"{title}: stator-flux magnitude", "stator flux |psi_s| / Wb", t, [
-        (trace.psi_wb, "plant |psi_s|", {"color": "tab:blue", "lw": 0.4}),
-        (trace.psi_ref_wb, "controller psi*", {"color": "k", "lw": 1.0}),
-    ]))
-
-    # currents: whole run + two fundamental periods
-    span = 2.0 / f1 if f1 > 0 else 0.02
-    zoom = slice(max(0, k_end - int(round(span / dt))), k_end)
-    paths.append(plot_phase_currents(out / f"{tag}_currents.png", title, trace, zoom))
-
-    paths.append(plot_lines(out / f"{tag}_vo.png", f"{title}: neutral-point voltage", "V_o / V", t,
-                            [(trace.vo_v, "plant V_o = (u_c1 - u_c2)/2", {"color": "tab:blue", "lw": 0.5})],
-                            hline=(0.0, "")))
+    tw = thd_span(metrics)
+    f1 = tw[2] if tw is not None else 0.0
+    k_end = min(trace.n, int(round((tw[1] if tw is not None else trace.n * dt) / dt)))
+    psi_ref = trace.psi_ref_wb.astype(np.float64)
+    paths = [
+        plot_speed(out / f"{tag}_speed.png", title, trace),
+        plot_torque(out / f"{tag}_torque.png", title, trace),
+        plot_lines(out / f"{tag}_flux.png", heading(title, f"stator-flux magnitude, {run_span(trace)}"),
+                   "stator flux |psi_s| / Wb", t, [
+                       (trace.psi_wb, "plant |psi_s|", {"color": "tab:blue", "lw": 0.4}),
+                       (psi_ref, "controller psi*", {"color": "k", "lw": 1.0}),
+                   ]),
+        plot_flux_locus(out / f"{tag}_locus.png", title, trace, model, metrics, psi_ref),
+        plot_phase_currents(out / f"{tag}_currents.png", title, trace, zoom_slice(trace, metrics, fallback_s=0.02)),
+        plot_spectrum(out / f"{tag}_spectrum.png", title, trace.ia_a, dt, metrics),
+        plot_lines(out / f"{tag}_vo.png", heading(title, f"neutral-point voltage, {run_span(trace)}"), "V_o / V", t,
+                   [(trace.vo_v, "plant V_o = (u_c1 - u_c2)/2", {"color": "tab:blue", "lw": 0.5})],
+                   hline=(0.0, "")),
+    ]
 
     # line voltage: 10 control periods and one fundamental period
     half = 0.5 * trace.udc_v
@@ -88,7 +94,9 @@ def plot_three_level(trace: Trace, model: Model, strategy: str, speed_rpm: float
             tt, vv = uab_steps(trace, s)
             ax.plot(tt * 1e3, vv, drawstyle="steps-post", lw=0.7, color="tab:blue", label="u_ab")
         ax.set_yticks(np.arange(-4, 5) * half)
-        ax.set(xlabel="time t / ms", ylabel="u_ab / V", title=f"{title}: line voltage u_ab ({label})")
+        ax.set(xlabel="time t / ms", ylabel="u_ab / V",
+               title=heading(title, f"line voltage u_ab, {label} "
+                             f"{span(sample_time(s.start, dt), sample_time(s.stop, dt))}"))
         ax.grid(True, alpha=0.3)
         ax.legend(loc="upper right")
     paths.append(save_figure(fig, out / f"{tag}_uab.png"))

@@ -192,9 +192,9 @@ def run_three_level(model: Model, strategies: list[str], plots: Path | None = No
                 if plots is not None:
                     from codegen.topologies.ttype.plots import plot_three_level
 
-                    tag = s if key != "load_step" else f"{s}_loadstep"
-                    plot_speed = speed if key == "load_step" else _plot_speed(m)
-                    met["plots"] = [str(p) for p in plot_three_level(trace, m, tag, plot_speed, plots)]
+                    tag, run = _plot_names(s, key, m)
+                    shown = entries.get(f"{key}_steady", met)  # the metrics the table prints for this run
+                    met["plots"] = [str(p) for p in plot_three_level(trace, m, tag, run, plots, shown)]
                 if writer is not None:
                     writer.add(s, key, trace)
                 whole.append((trace.n, fault_counts(trace.fault, FAULT_BITS)))
@@ -225,9 +225,16 @@ def run_three_level(model: Model, strategies: list[str], plots: Path | None = No
                    "_table": text, "_warnings": warnings})
 
 
-def _plot_speed(m: Model) -> float:
-    """The speed a run's plots are named after: its last speed reference, r/min."""
-    return float(max(m.scenario.speed_ref_rpm, key=lambda step: step[0])[1])
+def _plot_names(strategy: str, key: str, m: Model) -> tuple[str, str]:
+    """(file tag, title) of one run's plots: the config's scenario by its profiles, a Table-5 steady run
+    by its imposed speed and torque, the load step by its speed and load."""
+    from codegen.simulator.figures import scenario_label
+
+    if key == "scenario":
+        return strategy, f"{strategy}, config scenario ({scenario_label(m)})"
+    if key == "load_step":
+        return f"{strategy}_loadstep", f"{strategy}, rated-load step ({scenario_label(m)})"
+    return f"{strategy}_{key}", f"{strategy}, steady run, speed imposed ({scenario_label(m)})"
 
 
 def _fault_warning(strategy: str, runs: list[tuple[int, dict[str, Any]]]) -> str | None:

@@ -62,6 +62,9 @@ STATE = SimStruct("ttype_sim_state_t", "T-type carried state", Record("ttype_sim
     prior_seg_s     f64   N_SEG  its segment durations, s
     last_state      i32   1      state at the end of the previous period (13 = OOO)
     sampled_vo_v    f64   1      plant V_o at t_k - measurement_delay_s, V
+    applied_gates_off  i32   1   the step's gates_off of period k-1 (0 before the first)
+    prior_gates_off    i32   1   the step's gates_off of period k-2 (0 before the first two)
+    last_open          i32   1   1: the inverter was open (every switch off) during the previous period
 """, N_SEG=N_SEGMENTS)), base=SIM_STATE)
 
 TRACE = SimStruct("ttype_sim_trace_t", "T-type trace", Record("ttype_sim_trace", fields("""
@@ -73,7 +76,7 @@ TRACE = SimStruct("ttype_sim_trace_t", "T-type trace", Record("ttype_sim_trace",
     applied_vector  u16   1      vector applied during [t_k, t_k+1) (the decision of k-d)
     prev_vector     u16   1      in.prev_vector as the controller saw it (the decision of k - max(d, 1))
     t_n_prev_s      f64   1      in.t_n_prev_s before the format conversion, s
-    leg_changes     u16   1      one-level leg changes of the applied period
+    leg_changes     u16   1      one-level leg changes of the applied period (0 with the inverter open)
     uab_v           f64   N_SEG  u_ab per applied segment (V_o at the segment start), V
     seg_s           f64   N_SEG  applied segment durations, s (0: skipped)
     seg_states      u16   N_SEG  applied states per segment
@@ -116,7 +119,10 @@ else:
         and ``leg_changes`` describe the period actually applied during
         [t_k, t_k+1); ``prev_vector``/``t_n_prev_s`` the step's inputs.
         Per-segment arrays have shape (n, 7); zero-length segments
-        (``seg_s == 0``) were not applied.  ``udc_v`` is the plant's.
+        (``seg_s == 0``) were not applied.  ``udc_v`` is the plant's.  ``gates_off``: the
+        step's request (every switch off, acting d periods later as its decision does);
+        ``inverter_open``: 1 where the inverter was open during [t_k, t_k+1) (the
+        segments then as commanded, not applied).
         """, scalars=("udc_v",), base=_TraceProperties)
 
 

@@ -214,7 +214,7 @@ def derive_two_level(model: Model, switch_table: SwitchTable | None = None) -> T
             raise ValueError(f"switch table for {c.strategy} must be {n_cond} x {n_sec}")
         rows = tuple(tuple(cell) for row in switch_table for cell in row)
     ux, uy = vectors.unit_vectors()
-    nf, consts = step_format(model, _constants(model), cost_bounds(model))
+    nf, consts = step_format(model, _constants, cost_bounds)
     psi_tab: tuple[np.generic, ...] = ()
     psi_slope: tuple[np.generic, ...] = ()
     if c.psi_ref == "mtpa":

@@ -81,7 +81,7 @@ def run_scenarios(model: Model, strategies: list[str], plots: Path | None = None
             if plots is not None:
                 from codegen.topologies.twolevel.plots import plot_two_level
 
-                m["plots"] = [str(p) for p in plot_two_level(trace, variant, s, plots)]
+                m["plots"] = [str(p) for p in plot_two_level(trace, variant, s, plots, m)]
             if writer is not None:
                 writer.add(s, "scenario", trace)
             warning = fault_warning(s, m["periods"], m)

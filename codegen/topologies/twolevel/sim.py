@@ -53,6 +53,9 @@ STATE = SimStruct("twolevel_sim_state_t", "two-level carried state", Record("two
     prev_sw   i32   1  decision of period k-1, Sa*4+Sb*2+Sc (000 before the first)
     prior_sw  i32   1  decision of period k-2 (000 before the first two)
     held_sw   i32   1  state the inverter held during [t_k-1, t_k) (000 before the first period)
+    prev_gates_off   i32   1  the step's gates_off of period k-1 (0 before the first)
+    prior_gates_off  i32   1  the step's gates_off of period k-2 (0 before the first two)
+    held_open        i32   1  1: the inverter was open (every switch off) during [t_k-1, t_k)
 """)), base=SIM_STATE)
 
 TRACE = SimStruct("twolevel_sim_trace_t", "two-level trace", Record("twolevel_sim_trace", fields("""
@@ -79,7 +82,9 @@ else:
         ``sw`` is the controller's decision at k; ``applied_sw`` the state the
         inverter holds during [t_k, t_k+1), the decision of k-d (d the plant's
         actuation delay: equal to ``sw`` for d = 0); ``prev_sw`` the step's
-        ``prev_sw`` input.  ``*_meas_*``: what the controller saw (sensors).
+        ``prev_sw`` input.  ``gates_off``: the step's request (every switch off, acting
+        d periods later as its decision does); ``inverter_open``: 1 where the inverter
+        was open during [t_k, t_k+1).  ``*_meas_*``: what the controller saw (sensors).
         """)
 
 

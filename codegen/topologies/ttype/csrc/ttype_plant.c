@@ -86,18 +86,42 @@ static void integrate(const ttype_rhs_t *c, ttype_plant_state_t *s, double dt_s,
     s->vo_v = x[4];
 }
 
-/* Integrate leg levels lv over len_s in sub-steps of at most substep_max_s. */
-static void integrate_levels(ttype_plant_state_t *s, const ttype_sim_params_t *p, const int lv[3],
+/* The open inverter (gates off, sim_inverter.h) over dt_s in `substeps` sub-steps: every switch off,
+ * the phase currents in the outer diodes (each dropping device_drop_v) across the whole DC link, V_o
+ * held (the clamp pair off: no midpoint current); the angle unwrapped (the caller wraps). */
+static void integrate_open(ttype_plant_state_t *s, const ttype_sim_params_t *p, double load_nm,
+                           double dt_s, int substeps)
+{
+    const sim_params_t *m = &p->common;
+    sim_open_t c;
+    double x[PMSM_RK4_MAX];
+    sim_open_setup(&c, m->udc_v, m->device_drop_v, 5);
+    pmsm_dq_rhs_setup(&c.m, m->rs_ohm, m->ld_h, m->lq_h, m->psi_f_wb, m->pole_pairs, m->j_kgm2,
+                      m->b_nms, load_nm, m->speed_imposed);
+    sim_period_motor_load(&s->motor, x);
+    x[4] = s->vo_v;
+    sim_open_interval(&c, x, dt_s, substeps);
+    sim_period_motor_store(&s->motor, x);
+    s->vo_v = x[4];
+}
+
+/* Integrate leg levels lv (NULL: the inverter open) over len_s in sub-steps of at most
+ * substep_max_s. */
+static void integrate_levels(ttype_plant_state_t *s, const ttype_sim_params_t *p, const int *lv,
                              double load_nm, double len_s)
 {
     ttype_rhs_t c;
+    if (lv == NULL) {
+        integrate_open(s, p, load_nm, len_s, sim_inverter_substeps(len_s, p->substep_max_s));
+        return;
+    }
     setup(&c, p, lv, load_nm);
     integrate(&c, s, len_s, sim_inverter_substeps(len_s, p->substep_max_s));
 }
 
-/* The piece [t0, t0 + len) with levels lv, split at the snapshot offset t_snap when it falls
- * inside (*snap, *taken). */
-static void integrate_piece(ttype_plant_state_t *s, const ttype_sim_params_t *p, const int lv[3],
+/* The piece [t0, t0 + len) with levels lv (NULL: the inverter open), split at the snapshot offset
+ * t_snap when it falls inside (*snap, *taken). */
+static void integrate_piece(ttype_plant_state_t *s, const ttype_sim_params_t *p, const int *lv,
                             double load_nm, double t0, double len, double t_snap,
                             ttype_plant_state_t *snap, int *taken)
 {
@@ -132,13 +156,34 @@ int ttype_plant_advance(ttype_plant_state_t *s, const ttype_sim_params_t *p, int
     return 0;
 }
 
+int ttype_plant_advance_open(ttype_plant_state_t *s, const ttype_sim_params_t *p, double load_nm,
+                             double dt_s, int substeps)
+{
+    if (substeps < 1 || !(dt_s > 0.0) || !isfinite(dt_s)) {
+        return -1;
+    }
+    integrate_open(s, p, load_nm, dt_s, substeps);
+    s->motor.theta_e_rad = pmsm_dq_wrap_angle(s->motor.theta_e_rad);
+    return 0;
+}
+
 int ttype_plant_advance_period(ttype_plant_state_t *s, const ttype_sim_params_t *p, int from_state,
                                const uint16_t states[7], const double seg_s[7], double load_nm,
                                double uab_v[7], double t_snap_s, ttype_plant_state_t *snap)
 {
+    return ttype_plant_advance_period_gates(s, p, from_state, 0, 0, states, seg_s, load_nm, uab_v,
+                                            t_snap_s, snap);
+}
+
+int ttype_plant_advance_period_gates(ttype_plant_state_t *s, const ttype_sim_params_t *p,
+                                     int from_state, int from_open, int open,
+                                     const uint16_t states[7], const double seg_s[7],
+                                     double load_nm, double uab_v[7], double t_snap_s,
+                                     ttype_plant_state_t *snap)
+{
     const double td = p->common.dead_time_s;
     double t0 = 0.0;
-    int i, taken = 0, prev[3];
+    int i, taken = 0, prev[3], first = 1;
     if (!(p->substep_max_s > 0.0) || !isfinite(p->substep_max_s)
         || (from_state >= TTYPE_PLANT_N_STATES) || (t_snap_s >= 0.0 && snap == NULL)) {
         return -1;
@@ -155,13 +200,25 @@ int ttype_plant_advance_period(ttype_plant_state_t *s, const ttype_sim_params_t 
         const int st = (int)states[i];
         int lv[3];
         if (uab_v != NULL) {
-            uab_v[i] = ttype_plant_uab(p, st, s->vo_v);
+            uab_v[i] = ttype_plant_uab(p, st, s->vo_v); /* as commanded, also with the gates off */
         }
         if (!(seg_s[i] > 0.0)) {
             continue;
         }
         (void)ttype_plant_levels(st, lv);
-        if (td > 0.0 && sim_inverter_edges(prev, lv)) {
+        if (open) {
+            /* gates off: every switch off over the segment's time (no dead time: nothing turns on) */
+            integrate_piece(s, p, NULL, load_nm, t0, seg_s[i], t_snap_s, snap, &taken);
+        } else if (first && from_open && td > 0.0) {
+            /* gates on again after an open period: the switches turning on close one dead time late,
+             * the legs meanwhile in their diodes (the open inverter) */
+            const double dead_s = td < seg_s[i] ? td : seg_s[i];
+            integrate_piece(s, p, NULL, load_nm, t0, dead_s, t_snap_s, snap, &taken);
+            if (seg_s[i] - dead_s > 0.0) {
+                integrate_piece(s, p, lv, load_nm, t0 + dead_s, seg_s[i] - dead_s, t_snap_s, snap,
+                                &taken);
+            }
+        } else if (td > 0.0 && sim_inverter_edges(prev, lv)) {
             /* the dead time of this segment's edges (at most the segment) */
             const double dead_s = td < seg_s[i] ? td : seg_s[i];
             int dead[3];
@@ -177,6 +234,7 @@ int ttype_plant_advance_period(ttype_plant_state_t *s, const ttype_sim_params_t 
             integrate_piece(s, p, lv, load_nm, t0, seg_s[i], t_snap_s, snap, &taken);
         }
         t0 += seg_s[i];
+        first = 0;
         prev[0] = lv[0];
         prev[1] = lv[1];
         prev[2] = lv[2];

@@ -116,6 +116,32 @@ int ttype_plant_advance_period(ttype_plant_state_t *s, const ttype_sim_params_t 
                                const uint16_t states[7], const double seg_s[7], double load_nm,
                                double uab_v[7], double t_snap_s, ttype_plant_state_t *snap);
 
+/*
+ * ttype_plant_advance_period with the gates: open != 0 (the step's gates_off acting in this period)
+ * integrates the period's time (the segments' sum) with the inverter open -- every switch off, the
+ * phase currents in the outer diodes across the whole DC link, the clamp pair off so V_o is held
+ * (sim_inverter.h "The open inverter") -- the states then only recorded (uab_v as commanded);
+ * from_open != 0 (the inverter was open before t_k) with dead_time_s > 0 spends the first
+ * min(dead_time_s, segment) of the first non-empty segment open.  With open = from_open = 0 this is
+ * ttype_plant_advance_period, bit for bit.  Returns 0 or -1 (as ttype_plant_advance_period).
+ */
+int ttype_plant_advance_period_gates(ttype_plant_state_t *s, const ttype_sim_params_t *p,
+                                     int from_state, int from_open, int open,
+                                     const uint16_t states[7], const double seg_s[7],
+                                     double load_nm, double uab_v[7], double t_snap_s,
+                                     ttype_plant_state_t *snap);
+
+/*
+ * Integrate the plant over dt_s with the inverter open (gates off): every switch off, each phase
+ * current freewheeling through an outer diode against the whole DC link until it reaches zero, then
+ * held there while the back-EMF stays within the DC link; V_o held (sim_inverter.h "The open
+ * inverter"); each diode drops device_drop_v.  substeps >= 1 equal sub-steps, a zero crossing
+ * located inside its sub-step; the angle wrapped at the end.  Returns 0, or -1 (state untouched) if
+ * substeps < 1 or dt_s is not a positive finite number.
+ */
+int ttype_plant_advance_open(ttype_plant_state_t *s, const ttype_sim_params_t *p, double load_nm,
+                             double dt_s, int substeps);
+
 /* Leg levels (Sa, Sb, Sc) in {-1, 0, +1} of state 0..26; returns -1 otherwise. */
 int ttype_plant_levels(int state, int levels[3]);
 

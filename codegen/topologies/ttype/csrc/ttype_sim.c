@@ -37,16 +37,25 @@
  *     set to dt_s minus the sum of the others, so that the plant's period is
  *     dt_s (the float32 sum is off by ~1e-7 relative).  The period applied during [t_k, t_k+1) is the decision of
  *     k-d: this one (d = 0), "applied" (d = 1) or "prior" (d = 2).
- *  7. ttype_plant_advance_period over the applied 7 segments from the state
- *     at the end of the previous period (dead time at every leg edge),
- *     substep_max_s and load_nm[k], keeping the plant at
+ *     The step's gates_off travels with its decision (applied_gates_off,
+ *     prior_gates_off): when the one of k-d is 1 the inverter is open during
+ *     [t_k, t_k+1), every switch off (a gates-off request takes effect with
+ *     the actuation delay of a decision); the controller's prev_vector stays
+ *     the decision (the safe one, OOO, that the PWM holds while its outputs
+ *     are off), the recorded segments and uab_v are the commanded ones.
+ *  7. ttype_plant_advance_period_gates over the applied 7 segments from the
+ *     state at the end of the previous period (dead time at every leg edge;
+ *     after an open period the first dead time open), or with the inverter
+ *     open, substep_max_s and load_nm[k], keeping the plant at
  *     t_k+1 - measurement_delay_s for the next period's samples.
- *  Commit: prior := applied, applied := the decision of k.
+ *  Commit: prior := applied, applied := the decision of k (with their
+ *  gates_off), last_open := open.
  *
  * Leg-level changes of period k: sum over the legs and over consecutive
  * NON-EMPTY applied segments of |S_x(i) - S_x(i-1)| (a P<->N jump counts
  * 2), including the boundary from the last non-empty segment of the
- * previous period (OOO before period 0).
+ * previous period (OOO before period 0); 0 in an open period, whose
+ * following period counts from the state before it.
  *
  * Period by period (the serial HIL's closed loop, where a board computes the
  * decision): ttype_sim_hil_input gives the controller input of the next
@@ -66,6 +75,15 @@
 #include "ttype_plant.h"
 #include "mpc_binding.h"
 #include "ttype_decision.h"
+
+/* The step's gates_off (1: open the inverter).  Every generated binding (mpc_binding.h, which defines
+ * MPC_CONFIG_HASH) has it in its output record; the stub controllers of tests/fixtures do not, and never
+ * open the inverter. */
+#ifdef MPC_CONFIG_HASH
+#define GATES_OFF(out) ((out)->gates_off != 0u ? 1 : 0)
+#else
+#define GATES_OFF(out) ((void)(out), 0)
+#endif
 
 #define TTYPE_SIM_OOO TTYPE_DECISION_OOO
 #define TTYPE_SIM_N_VECTORS TTYPE_DECISION_N_VECTORS
@@ -98,6 +116,9 @@ int ttype_sim_init(const ttype_sim_params_t *p, ttype_sim_state_t *state)
     state->prior_seg_s[0] = p->common.dt_s;
     state->last_state = TTYPE_SIM_OOO;
     state->sampled_vo_v = 0.0;
+    state->applied_gates_off = 0;
+    state->prior_gates_off = 0;
+    state->last_open = 0;
     return 0;
 }
 
@@ -116,12 +137,19 @@ static int decision_valid(int32_t vector, const uint16_t states[7], const double
     return 1;
 }
 
-/* The carried queue and last state are valid. */
+static int is_flag(int32_t x)
+{
+    return x == 0 || x == 1;
+}
+
+/* The carried queue and last state are valid (the gates_off flags 0 or 1). */
 static int state_valid(const ttype_sim_state_t *state)
 {
     return decision_valid(state->applied_vector, state->applied_states, state->applied_seg_s)
            && decision_valid(state->prior_vector, state->prior_states, state->prior_seg_s)
-           && state->last_state >= 0 && state->last_state < TTYPE_PLANT_N_STATES;
+           && state->last_state >= 0 && state->last_state < TTYPE_PLANT_N_STATES
+           && is_flag(state->applied_gates_off) && is_flag(state->prior_gates_off)
+           && is_flag(state->last_open);
 }
 
 /* The decision of k-1 (slot 0, "applied") or k-2 (slot 1, "prior"). */
@@ -220,24 +248,33 @@ static int period_finish(const ttype_sim_params_t *p, ttype_sim_state_t *state,
     const int d = p->common.delay_periods;
     const double t_snap = sim_period_snap_offset(&p->common);
     double uab[7] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+    const int gates_off = GATES_OFF(out);
     ttype_decision_t dec, cur, prev;
     ttype_plant_state_t snap;
     unsigned changes;
-    int i, last, bad;
+    int i, last, bad, open;
 
-    /* 6. check the decision; the period applied now is the decision of k-d */
+    /* 6. check the decision; the period applied now is the decision of k-d, with its gates_off
+     * (1: the inverter open, docs/simulation.md "Fault behaviour of the plant") */
     bad = ttype_decision_take(out, p->common.dt_s, &dec);
     if (d == 0) {
         cur = dec;
+        open = gates_off;
     } else {
         queued(state, d - 1, &cur);
+        open = (d == 1) ? state->applied_gates_off : state->prior_gates_off;
     }
     controller_prev(p, state, &prev);
     changes = applied_changes(&cur, state->last_state, &last);
+    if (open) { /* no leg switches; the next period's edges count from the state before */
+        changes = 0u;
+        last = state->last_state;
+    }
 
     /* 5. record the sample instant, the decision, the applied period */
     sim_period_record(&tr->common, j, &p->common, &state->common, &x->motor, v, out->vector,
-                      out->n_eval, out->fault, (float)MPC_DECODE_te_est_nm(out->te_est_nm),
+                      out->n_eval, out->fault, (uint16_t)gates_off, open,
+                      (float)MPC_DECODE_te_est_nm(out->te_est_nm),
                       (float)MPC_DECODE_psi_est_wb(out->psi_est_wb));
     if (tr->vo_v != NULL) tr->vo_v[j] = x->vo_v;
     if (tr->vo_meas_v != NULL) tr->vo_meas_v[j] = sampled_vo(p, state, x);
@@ -255,8 +292,8 @@ static int period_finish(const ttype_sim_params_t *p, ttype_sim_state_t *state,
 
     /* 7. integrate the applied period over [t_k, t_k+1) (not an invalid decision of d = 0) */
     if (!(bad != 0 && d == 0)) {
-        (void)ttype_plant_advance_period(x, p, state->last_state, cur.states, cur.seg_s, v->load,
-                                         uab, t_snap, &snap);
+        (void)ttype_plant_advance_period_gates(x, p, state->last_state, state->last_open, open,
+                                               cur.states, cur.seg_s, v->load, uab, t_snap, &snap);
     }
     if (tr->uab_v != NULL) {
         for (i = 0; i < TTYPE_PLANT_N_SEG; ++i) {
@@ -272,6 +309,9 @@ static int period_finish(const ttype_sim_params_t *p, ttype_sim_state_t *state,
 
     /* commit period k: the queue moves on */
     state->last_state = last;
+    state->last_open = open;
+    state->prior_gates_off = state->applied_gates_off;
+    state->applied_gates_off = gates_off;
     state->prior_vector = state->applied_vector;
     state->prior_t_n_s = state->applied_t_n_s;
     state->applied_vector = dec.vector;

@@ -9,21 +9,27 @@
  * [t_k+d, t_k+d+1), d = ONB_DELAY_PERIODS (the simulator's
  * Plant.delay_periods, 0..2); prev_sw is the state the inverter applies
  * during [t_k, t_k+1), the decision of k - max(d, 1) (for d = 0 the state
- * held at the sample instant); 000 before the first decisions.  No dead
- * time, device drops or sensor non-idealities on board.
+ * held at the sample instant); 000 before the first decisions.  The step's
+ * gates_off travels with its decision: when the acting one is 1 the
+ * inverter is open over the period (sim_inverter.h "The open inverter",
+ * as the host simulator's).  No dead time, device drops or sensor
+ * non-idealities on board.
  */
 #include "onboard.h"
 #include "plant_config.h"
 #include "twolevel_rhs.h"
 
-/* decisions: [0] of k (after the shift of onb_topo_apply), [1] of k-1, [2] of k-2 */
+/* decisions: [0] of k (after the shift of onb_topo_apply), [1] of k-1, [2] of k-2; their gates_off */
 static uint16_t queue[3];
+static uint16_t gates[3];
 
 void onb_topo_reset(void)
 {
-    queue[0] = 0u;
-    queue[1] = 0u;
-    queue[2] = 0u;
+    int i;
+    for (i = 0; i < 3; ++i) {
+        queue[i] = 0u;
+        gates[i] = 0u;
+    }
 }
 
 void onb_topo_input(const onb_plant_t *p, mpc_input_t *in)
@@ -43,6 +49,19 @@ int16_t onb_topo_apply(onb_plant_t *p, const mpc_output_t *out, sim_real_t load_
     queue[2] = queue[1];
     queue[1] = queue[0];
     queue[0] = out->sw;
+    gates[2] = gates[1];
+    gates[1] = gates[0];
+    gates[0] = (out->gates_off != 0u) ? 1u : 0u;
+    if (gates[ONB_DELAY_PERIODS] != 0u) {
+        /* gates off: every switch off, the currents in the diodes */
+        sim_open_t o;
+        sim_open_setup(&o, ONB_UDC, SIM_R(0.0), 4);
+        pmsm_dq_rhs_setup(&o.m, ONB_RS, ONB_LD, ONB_LQ, ONB_PSI_F, ONB_POLE_PAIRS, ONB_J, ONB_B, load_nm,
+                          ONB_SPEED_IMPOSED);
+        sim_open_interval(&o, p->x, ONB_DT, sim_inverter_substeps(ONB_DT, ONB_SUBSTEP_MAX_S));
+        p->x[3] = pmsm_dq_wrap(p->x[3]);
+        return 0;
+    }
     twolevel_rhs_levels((int)queue[ONB_DELAY_PERIODS], lv);
     twolevel_rhs_setup(&c, lv, ONB_UDC, SIM_R(0.0));
     pmsm_dq_rhs_setup(&c.m, ONB_RS, ONB_LD, ONB_LQ, ONB_PSI_F, ONB_POLE_PAIRS, ONB_J, ONB_B, load_nm,

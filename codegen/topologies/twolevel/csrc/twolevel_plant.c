@@ -56,6 +56,45 @@ static void advance_levels(pmsm_state_t *s, const sim_params_t *p, const int lv[
     sim_period_motor_store(s, x);
 }
 
+/* One interval of the open inverter (gates off, sim_inverter.h): every switch off, the currents in the
+ * diodes, each diode dropping p->device_drop_v; RK4 (pmsm_rk4.h) with the zero crossings located. */
+static void advance_open(pmsm_state_t *s, const sim_params_t *p, double load_nm, double dt_s,
+                         int substeps)
+{
+    sim_open_t c;
+    double x[PMSM_RK4_MAX];
+
+    sim_open_setup(&c, p->udc_v, p->device_drop_v, 4);
+    pmsm_dq_rhs_setup(&c.m, p->rs_ohm, p->ld_h, p->lq_h, p->psi_f_wb, p->pole_pairs, p->j_kgm2,
+                      p->b_nms, load_nm, p->speed_imposed);
+
+    sim_period_motor_load(s, x);
+    sim_open_interval(&c, x, dt_s, substeps);
+    x[3] = pmsm_dq_wrap(x[3]);
+    sim_period_motor_store(s, x);
+}
+
+/* One interval with leg levels lv, or (lv NULL) with the inverter open. */
+static void advance_interval(pmsm_state_t *s, const sim_params_t *p, const int *lv, double load_nm,
+                             double dt_s, int substeps)
+{
+    if (lv == NULL) {
+        advance_open(s, p, load_nm, dt_s, substeps);
+    } else {
+        advance_levels(s, p, lv, load_nm, dt_s, substeps);
+    }
+}
+
+int twolevel_plant_advance_open(pmsm_state_t *s, const sim_params_t *p, double load_nm, double dt_s,
+                                int substeps)
+{
+    if (substeps < 1 || !(dt_s > 0.0) || !isfinite(dt_s)) {
+        return -1;
+    }
+    advance_open(s, p, load_nm, dt_s, substeps);
+    return 0;
+}
+
 int twolevel_plant_advance(pmsm_state_t *s, const sim_params_t *p, int sw, double load_nm,
                            double dt_s, int substeps)
 {
@@ -68,30 +107,39 @@ int twolevel_plant_advance(pmsm_state_t *s, const sim_params_t *p, int sw, doubl
     return 0;
 }
 
-/* The piece [t0, t0 + len) of a period with levels lv, sub-steps of at most h_max (n_full for
- * len == dt_s), split at the snapshot offset t_snap when it falls inside (*snap, *taken). */
-static void advance_piece(pmsm_state_t *s, const sim_params_t *p, const int lv[3], double load_nm,
+/* The piece [t0, t0 + len) of a period with levels lv (NULL: the inverter open), sub-steps of at most
+ * h_max (n_full for len == dt_s), split at the snapshot offset t_snap when it falls inside (*snap,
+ * *taken). */
+static void advance_piece(pmsm_state_t *s, const sim_params_t *p, const int *lv, double load_nm,
                           double t0, double len, int n_full, double t_snap, pmsm_state_t *snap,
                           int *taken)
 {
     const double h_max = p->dt_s / (double)n_full;
     const double a = *taken ? -1.0 : sim_period_snap_split(t0, len, t_snap);
     if (a < 0.0) {
-        advance_levels(s, p, lv, load_nm, len, len == p->dt_s ? n_full : sim_inverter_substeps(len, h_max));
+        advance_interval(s, p, lv, load_nm, len, len == p->dt_s ? n_full : sim_inverter_substeps(len, h_max));
         return;
     }
     if (a > 0.0) {
-        advance_levels(s, p, lv, load_nm, a, sim_inverter_substeps(a, h_max));
+        advance_interval(s, p, lv, load_nm, a, sim_inverter_substeps(a, h_max));
     }
     *snap = *s;
     *taken = 1;
     if (len - a > 0.0) {
-        advance_levels(s, p, lv, load_nm, len - a, sim_inverter_substeps(len - a, h_max));
+        advance_interval(s, p, lv, load_nm, len - a, sim_inverter_substeps(len - a, h_max));
     }
 }
 
 int twolevel_plant_advance_period(pmsm_state_t *s, const sim_params_t *p, int from_sw, int sw,
                                   double load_nm, int substeps, double t_snap_s, pmsm_state_t *snap)
+{
+    return twolevel_plant_advance_period_gates(s, p, from_sw, 0, sw, 0, load_nm, substeps, t_snap_s,
+                                               snap);
+}
+
+int twolevel_plant_advance_period_gates(pmsm_state_t *s, const sim_params_t *p, int from_sw,
+                                        int from_open, int sw, int open, double load_nm, int substeps,
+                                        double t_snap_s, pmsm_state_t *snap)
 {
     int from[3], to[3], taken = 0;
     const double td = p->dead_time_s;
@@ -102,7 +150,15 @@ int twolevel_plant_advance_period(pmsm_state_t *s, const sim_params_t *p, int fr
     }
     twolevel_rhs_levels(from_sw, from);
     twolevel_rhs_levels(sw, to);
-    if (td > 0.0 && sim_inverter_edges(from, to)) {
+    if (open) {
+        /* gates off: every switch opens at t_k (no dead time: nothing turns on) */
+        advance_piece(s, p, NULL, load_nm, 0.0, p->dt_s, substeps, t_snap_s, snap, &taken);
+    } else if (from_open && td > 0.0) {
+        /* gates on again after an open period: every leg's switch turning on closes one dead time late,
+         * the legs meanwhile in their diodes (the open inverter) */
+        advance_piece(s, p, NULL, load_nm, 0.0, td, substeps, t_snap_s, snap, &taken);
+        advance_piece(s, p, to, load_nm, td, p->dt_s - td, substeps, t_snap_s, snap, &taken);
+    } else if (td > 0.0 && sim_inverter_edges(from, to)) {
         int dead[3];
         double i_abc[3];
         sim_inverter_phase_currents(s->i_d_a, s->i_q_a, s->theta_e_rad, i_abc);

@@ -66,6 +66,29 @@ int twolevel_plant_advance(pmsm_state_t *s, const sim_params_t *p, int sw, doubl
 int twolevel_plant_advance_period(pmsm_state_t *s, const sim_params_t *p, int from_sw, int sw,
                                   double load_nm, int substeps, double t_snap_s, pmsm_state_t *snap);
 
+/*
+ * twolevel_plant_advance_period with the gates: open != 0 (the step's gates_off acting in this
+ * period) integrates the whole period with the inverter open (every switch off, the phase currents
+ * freewheeling in the diodes, sim_inverter.h "The open inverter"; sw then only validated);
+ * from_open != 0 (the inverter was open before t_k) with p->dead_time_s > 0 spends the first dead
+ * time open, then sw (every leg's switch turning on closes one dead time late).  With open =
+ * from_open = 0 this is twolevel_plant_advance_period, bit for bit.  Returns 0 or -1 (as
+ * twolevel_plant_advance_period).
+ */
+int twolevel_plant_advance_period_gates(pmsm_state_t *s, const sim_params_t *p, int from_sw,
+                                        int from_open, int sw, int open, double load_nm, int substeps,
+                                        double t_snap_s, pmsm_state_t *snap);
+
+/*
+ * Integrate the plant over dt_s with the inverter open (gates off): every switch off, each phase
+ * current freewheeling through a diode against the DC link until it reaches zero, then held there
+ * while the back-EMF stays within the DC link (sim_inverter.h "The open inverter"); each diode drops
+ * p->device_drop_v.  substeps >= 1 equal sub-steps, a zero crossing located inside its sub-step.
+ * Returns 0, or -1 (state untouched) if substeps < 1 or dt_s is not a positive finite number.
+ */
+int twolevel_plant_advance_open(pmsm_state_t *s, const sim_params_t *p, double load_nm, double dt_s,
+                                int substeps);
+
 /* Leg levels (Sa, Sb, Sc) in {0, 1} of switching state sw = Sa*4 + Sb*2 + Sc. */
 void twolevel_plant_levels(int sw, int lv[3]);
 

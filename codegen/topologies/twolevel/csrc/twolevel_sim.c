@@ -23,17 +23,24 @@
  *     and the state applied during [t_k, t_k+1)).
  *  6. Decision queue: the state applied during [t_k, t_k+1) is the
  *     decision of k-d: out.sw (d = 0), prev_sw (d = 1, the decision of
- *     k-1) or prior_sw (d = 2, of k-2).  The controller's
- *     delay_compensation (what it assumes) does not enter.  A decision
- *     outside 0..7 stops the run (-3).
- *  7. twolevel_plant_advance_period from held_sw (the state of
- *     [t_k-1, t_k): the dead time of the edges at t_k) to the applied state
- *     over dt_s with `substeps` RK4 sub-steps and the load torque
- *     load_nm[k] (ignored when the speed is imposed), keeping the plant at
- *     t_k+1 - measurement_delay_s for the next period's samples.
- *  Commit: held_sw := applied, prior_sw := prev_sw, prev_sw := out.sw.
+ *     k-1) or prior_sw (d = 2, of k-2).  The step's gates_off travels with
+ *     its decision (out.gates_off, prev_gates_off, prior_gates_off): when
+ *     the one of k-d is 1 the inverter is open during [t_k, t_k+1), every
+ *     switch off (a gates-off request takes effect with the actuation delay
+ *     of a decision).  The controller's prev_sw stays the decision (the
+ *     safe one, 000, that the PWM holds while its outputs are off).  The
+ *     controller's delay_compensation (what it assumes) does not enter.  A
+ *     decision outside 0..7 stops the run (-3).
+ *  7. twolevel_plant_advance_period_gates from held_sw / held_open (the
+ *     inverter of [t_k-1, t_k): the dead time of the edges at t_k) to the
+ *     applied state, or the open inverter, over dt_s with `substeps` RK4
+ *     sub-steps and the load torque load_nm[k] (ignored when the speed is
+ *     imposed), keeping the plant at t_k+1 - measurement_delay_s for the
+ *     next period's samples.
+ *  Commit: held_sw := applied, held_open := open, prior_sw := prev_sw,
+ *  prev_sw := out.sw, and the same for the gates_off queue.
  * Initial state: the shared one (sim_period_reset) and prev_sw = prior_sw =
- * held_sw = 0 (000).
+ * held_sw = 0 (000), the gates_off queue 0, held_open 0.
  *
  * Period by period (the serial HIL's closed loop, where a board computes the
  * decision): twolevel_sim_hil_input gives the controller input of the next
@@ -51,6 +58,15 @@
 #include "twolevel_plant.h"
 #include "mpc_binding.h"
 
+/* The step's gates_off (1: open the inverter).  Every generated binding (mpc_binding.h, which defines
+ * MPC_CONFIG_HASH) has it in its output record; the stub controllers of tests/fixtures do not, and never
+ * open the inverter. */
+#ifdef MPC_CONFIG_HASH
+#define GATES_OFF(out) ((out)->gates_off != 0u ? 1 : 0)
+#else
+#define GATES_OFF(out) ((void)(out), 0)
+#endif
+
 static int params_valid(const twolevel_sim_params_t *p)
 {
     return p != NULL && sim_period_params_valid(&p->common) && p->substeps >= 1;
@@ -65,6 +81,9 @@ int twolevel_sim_init(const twolevel_sim_params_t *p, twolevel_sim_state_t *stat
     state->prev_sw = 0;
     state->prior_sw = 0;
     state->held_sw = 0;
+    state->prev_gates_off = 0;
+    state->prior_gates_off = 0;
+    state->held_open = 0;
     return 0;
 }
 
@@ -73,10 +92,17 @@ static int is_sw(int32_t sw)
     return sw >= 0 && sw <= 7;
 }
 
-/* The carried decisions and the held state are switching states 0..7. */
+static int is_flag(int32_t x)
+{
+    return x == 0 || x == 1;
+}
+
+/* The carried decisions and the held state are switching states 0..7, the gates_off flags 0 or 1. */
 static int state_valid(const twolevel_sim_state_t *state)
 {
-    return is_sw(state->prev_sw) && is_sw(state->prior_sw) && is_sw(state->held_sw);
+    return is_sw(state->prev_sw) && is_sw(state->prior_sw) && is_sw(state->held_sw)
+           && is_flag(state->prev_gates_off) && is_flag(state->prior_gates_off)
+           && is_flag(state->held_open);
 }
 
 /* The controller's prev_sw: the state applied during [t_k, t_k+1) (the decision of k-d), or for
@@ -96,6 +122,20 @@ static int applied(const twolevel_sim_params_t *p, const twolevel_sim_state_t *s
         return state->prev_sw;
     default:
         return state->prior_sw;
+    }
+}
+
+/* 1 if the inverter is open during [t_k, t_k+1): the gates_off of k-d (step 6), travelling with its
+ * decision. */
+static int applied_open(const twolevel_sim_params_t *p, const twolevel_sim_state_t *state, int gates_off)
+{
+    switch (p->common.delay_periods) {
+    case 0:
+        return gates_off;
+    case 1:
+        return state->prev_gates_off;
+    default:
+        return state->prior_gates_off;
     }
 }
 
@@ -126,14 +166,18 @@ static int period_finish(const twolevel_sim_params_t *p, twolevel_sim_state_t *s
                          const twolevel_sim_trace_t *tr, long j)
 {
     const int sw_dec = (int)out->sw;
-    /* 6. the decision queue: the decision of k-d acts now (docs/simulation.md "Timing") */
+    const int gates_off = GATES_OFF(out);
+    /* 6. the decision queue: the decision of k-d acts now (docs/simulation.md "Timing"), and its
+     * gates_off: 1 opens the inverter (docs/simulation.md "Fault behaviour of the plant") */
     const int sw_apply = applied(p, state, sw_dec);
+    const int open = applied_open(p, state, gates_off);
     const double t_snap = sim_period_snap_offset(&p->common);
     pmsm_state_t snap;
 
     /* 5. record the sample instant */
     sim_period_record(&tr->common, j, &p->common, &state->common, x, v, out->vector, out->n_eval,
-                      out->fault, (float)MPC_DECODE_te_est_nm(out->te_est_nm),
+                      out->fault, (uint16_t)gates_off, open,
+                      (float)MPC_DECODE_te_est_nm(out->te_est_nm),
                       (float)MPC_DECODE_psi_est_wb(out->psi_est_wb));
     if (tr->sw != NULL) tr->sw[j] = (uint16_t)out->sw;
     if (tr->applied_sw != NULL) tr->applied_sw[j] = (uint16_t)(sw_apply & 0xFFFF);
@@ -144,15 +188,18 @@ static int period_finish(const twolevel_sim_params_t *p, twolevel_sim_state_t *s
         return -3;
     }
 
-    /* 7. integrate the plant over [t_k, t_k+1), from the state held before t_k */
-    (void)twolevel_plant_advance_period(x, &p->common, state->held_sw, sw_apply, v->load,
-                                        p->substeps, t_snap, &snap);
+    /* 7. integrate the plant over [t_k, t_k+1), from the inverter held before t_k */
+    (void)twolevel_plant_advance_period_gates(x, &p->common, state->held_sw, state->held_open,
+                                              sw_apply, open, v->load, p->substeps, t_snap, &snap);
     if (!sim_period_finite(x)) {
         return -2; /* *state still holds the sample instant of period k */
     }
     state->held_sw = sw_apply;
+    state->held_open = open;
     state->prior_sw = state->prev_sw;
     state->prev_sw = sw_dec;
+    state->prior_gates_off = state->prev_gates_off;
+    state->prev_gates_off = gates_off;
     sim_period_commit(&p->common, &state->common, x, t_snap >= 0.0 ? &snap : NULL, v);
     return 0;
 }
