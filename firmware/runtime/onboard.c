@@ -9,6 +9,7 @@
 #include "mpc_runtime.h"
 #include "plant_config.h"
 #include "pmsm_dq.h"
+#include "sim_inverter.h"
 #include "sim_motor_inputs.h"
 #include "speed_pi.h"
 
@@ -48,6 +49,23 @@ uint16_t onboard_check(const hil_setpoints_t *sp)
         return 5u;
     }
     return 0u;
+}
+
+int onb_gates_open_period(uint16_t gates[3], uint16_t gates_off, onb_plant_t *p, sim_real_t load_nm, int nx)
+{
+    sim_open_t o;
+    gates[2] = gates[1];
+    gates[1] = gates[0];
+    gates[0] = (gates_off != 0u) ? 1u : 0u;
+    if (gates[ONB_DELAY_PERIODS] == 0u) {
+        return 0;
+    }
+    sim_open_setup(&o, ONB_UDC, SIM_R(0.0), nx);
+    pmsm_dq_rhs_setup(&o.m, ONB_RS, ONB_LD, ONB_LQ, ONB_PSI_F, ONB_POLE_PAIRS, ONB_J, ONB_B, load_nm,
+                      ONB_SPEED_IMPOSED);
+    sim_open_interval(&o, p->x, ONB_DT, sim_inverter_substeps(ONB_DT, ONB_SUBSTEP_MAX_S));
+    p->x[3] = pmsm_dq_wrap(p->x[3]);
+    return 1;
 }
 
 static uint16_t finite_state(const onb_plant_t *p)

@@ -68,5 +68,10 @@ void onb_topo_input(const onb_plant_t *p, mpc_input_t *in);
 /* Take the decision `out` and integrate the period [t_k, t_k+1) with the one acting then (the decision of
  * k - ONB_DELAY_PERIODS), the angle wrapped at the end; 0, or -3 for an invalid decision. */
 int16_t onb_topo_apply(onb_plant_t *p, const mpc_output_t *out, sim_real_t load_nm);
+/* For the topology's part: shift its gates-off queue (gates[0] the request of k, [1] of k-1, [2] of k-2);
+ * when the acting request (of k - ONB_DELAY_PERIODS) is set, integrate the period with the inverter open
+ * (every switch off, the currents in the diodes: sim_inverter.h "The open inverter"; nx the plant state's
+ * length) and return 1; else 0, and the topology applies its decision. */
+int onb_gates_open_period(uint16_t gates[3], uint16_t gates_off, onb_plant_t *p, sim_real_t load_nm, int nx);
 
 #endif /* ONBOARD_H */

@@ -49,18 +49,8 @@ int16_t onb_topo_apply(onb_plant_t *p, const mpc_output_t *out, sim_real_t load_
     queue[2] = queue[1];
     queue[1] = queue[0];
     queue[0] = out->sw;
-    gates[2] = gates[1];
-    gates[1] = gates[0];
-    gates[0] = (out->gates_off != 0u) ? 1u : 0u;
-    if (gates[ONB_DELAY_PERIODS] != 0u) {
-        /* gates off: every switch off, the currents in the diodes */
-        sim_open_t o;
-        sim_open_setup(&o, ONB_UDC, SIM_R(0.0), 4);
-        pmsm_dq_rhs_setup(&o.m, ONB_RS, ONB_LD, ONB_LQ, ONB_PSI_F, ONB_POLE_PAIRS, ONB_J, ONB_B, load_nm,
-                          ONB_SPEED_IMPOSED);
-        sim_open_interval(&o, p->x, ONB_DT, sim_inverter_substeps(ONB_DT, ONB_SUBSTEP_MAX_S));
-        p->x[3] = pmsm_dq_wrap(p->x[3]);
-        return 0;
+    if (onb_gates_open_period(gates, out->gates_off, p, load_nm, 4) != 0) {
+        return 0; /* gates off: every switch off, the currents in the diodes */
     }
     twolevel_rhs_levels((int)queue[ONB_DELAY_PERIODS], lv);
     twolevel_rhs_setup(&c, lv, ONB_UDC, SIM_R(0.0));
