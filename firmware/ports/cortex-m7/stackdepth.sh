@@ -7,13 +7,16 @@
 #   stack: largest frame N bytes in FUNC
 #   stack: worst depth N bytes from ROOT: f1(n1) > f2(n2) > ...
 # Functions without a .ci node (library code: memcpy, ...) count 0 bytes and
-# are marked '?'.
+# are marked '?'.  Calls made from assembly are invisible to GCC: ASM_EDGES
+# lists them (caller:callee), e.g. the naked Reset_Handler of startup_cm7.c,
+# which sets SP and branches to cm7_reset.
 set -eu
+ASM_EDGES="Reset_Handler:cm7_reset"
 dir=$1; shift
 roots=""
 while [ "$#" -gt 0 ] && [ "$1" != "--" ]; do roots="$roots $1"; shift; done
 [ "$#" -gt 0 ] && shift
-find "$dir" -name '*.ci' -exec cat {} + | awk -v roots="$roots" -v targets="$*" '
+find "$dir" -name '*.ci' -exec cat {} + | awk -v roots="$roots" -v targets="$*" -v asm_edges="$ASM_EDGES" '
 function depth(f,   i, n, best, d, k) {
     if (f in memo) return memo[f]
     if (f in busy) { recursive = 1; return 0 }
@@ -48,6 +51,11 @@ function depth(f,   i, n, best, d, k) {
     if (!((s, d) in seen)) { seen[s, d] = 1; ncallee[s]++; callee[s, ncallee[s]] = d }
 }
 END {
+    ne = split(asm_edges, ae, " ")
+    for (i = 1; i <= ne; i++) {
+        split(ae[i], e, ":")
+        if ((e[1] in node) && !((e[1], e[2]) in seen)) { seen[e[1], e[2]] = 1; ncallee[e[1]]++; callee[e[1], ncallee[e[1]]] = e[2] }
+    }
     nt = split(targets, tg, " ")
     for (t in node) {
         for (i = 1; i <= nt; i++) {

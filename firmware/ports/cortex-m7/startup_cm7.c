@@ -31,7 +31,16 @@ static void copy_words(const uint32_t *src, uint32_t *dst, const uint32_t *end)
     }
 }
 
-void Reset_Handler(void)
+/* The first instruction sets SP (tests/firmware/test_port_layout.py reads it
+ * back from the ELF); only basic asm in a naked function (GCC manual). */
+__attribute__((naked, noreturn)) void Reset_Handler(void)
+{
+    __asm__ volatile("ldr sp, =_estack\n\t"
+                     "b cm7_reset\n\t"
+                     ".ltorg");
+}
+
+__attribute__((noreturn)) void cm7_reset(void)
 {
     volatile uint32_t *p;
     cm7_fpu_enable();
@@ -45,6 +54,8 @@ void Reset_Handler(void)
     CM7_ISB(); /* code copied to ITCM is visible to instruction fetch */
     (void)main();
     port_exit(2u);
+    for (;;) {
+    }
 }
 
 void Default_Handler(void)

@@ -11,7 +11,8 @@
 /* 2.3.2 memory map: AHB4 (D3) peripherals */
 #define PWR_BASE   0x58024800u /* 6.8 PWR registers */
 #define RCC_BASE   0x58024400u /* 8.7 RCC registers */
-#define GPIOD_BASE 0x58020C00u /* 11.4 GPIO registers */
+#define GPIOB_BASE 0x58020400u /* 11.4 GPIO registers */
+#define GPIOD_BASE 0x58020C00u
 #define FLASH_BASE_REGS 0x52002000u /* 4.9 FLASH registers (bank 1 view) */
 #define USART3_BASE 0x40004800u /* 48.7 USART registers (APB1) */
 
@@ -31,13 +32,21 @@
 
 /* 8.7.2 RCC source control register */
 #define RCC_CR     CM7_REG(RCC_BASE + 0x00u)
+#define RCC_CR_HSION  (1u << 0)
+#define RCC_CR_HSIRDY (1u << 2)
 #define RCC_CR_HSEON  (1u << 16)
 #define RCC_CR_HSERDY (1u << 17)
 #define RCC_CR_HSEBYP (1u << 18)
 #define RCC_CR_PLL1ON (1u << 24)
 #define RCC_CR_PLL1RDY (1u << 25)
-/* 8.7.6 RCC clock configuration register: SW[2:0], SWS[5:3] (3 = PLL1) */
+#define RCC_CR_PLL2ON (1u << 26)
+#define RCC_CR_PLL2RDY (1u << 27)
+#define RCC_CR_PLL3ON (1u << 28)
+#define RCC_CR_PLL3RDY (1u << 29)
+/* 8.7.6 RCC clock configuration register: SW[2:0], SWS[5:3] (0 = HSI, 3 = PLL1) */
 #define RCC_CFGR   CM7_REG(RCC_BASE + 0x10u)
+#define RCC_CFGR_SW_MASK  (7u << 0)
+#define RCC_CFGR_SWS_MASK (7u << 3)
 /* 8.7.8-8.7.10 domain 1/2/3 clock configuration registers */
 #define RCC_D1CFGR CM7_REG(RCC_BASE + 0x18u) /* D1CPRE[11:8], D1PPRE[6:4], HPRE[3:0] */
 #define RCC_D2CFGR CM7_REG(RCC_BASE + 0x1Cu) /* D2PPRE2[10:8], D2PPRE1[6:4] */
@@ -48,12 +57,16 @@
 #define RCC_PLLCFGR CM7_REG(RCC_BASE + 0x2Cu)
 /* 8.7.13 PLL1 dividers: DIVN1[8:0] = N-1, DIVP1[15:9] = P-1, DIVQ1[22:16], DIVR1[30:24] */
 #define RCC_PLL1DIVR CM7_REG(RCC_BASE + 0x30u)
-/* 8.7.43 AHB4 clock enable (GPIODEN bit 3); 8.7.45 APB1L clock enable (USART3EN bit 18) */
+/* 8.7.43 AHB4 clock enable (GPIOBEN bit 1, GPIODEN bit 3); 8.7.45 APB1L clock enable (USART3EN bit 18) */
 #define RCC_AHB4ENR  CM7_REG(RCC_BASE + 0xE0u)
 #define RCC_APB1LENR CM7_REG(RCC_BASE + 0xE8u)
 
 /* 4.9.1 FLASH access control register: LATENCY[3:0], WRHIGHFREQ[5:4] */
 #define FLASH_ACR  CM7_REG(FLASH_BASE_REGS + 0x00u)
+
+/* 11.4.1 mode (2 bits per pin, 01 = output, 10 = alternate), 11.4.7 BSRR (bits 15:0 set, 31:16 reset) */
+#define GPIOB_MODER   CM7_REG(GPIOB_BASE + 0x00u)
+#define GPIOB_BSRR    CM7_REG(GPIOB_BASE + 0x18u)
 
 /* 11.4.1 mode (2 bits per pin, 10 = alternate), 11.4.3 speed, 11.4.10 AFRH (4 bits per pin 8..15) */
 #define GPIOD_MODER   CM7_REG(GPIOD_BASE + 0x00u)

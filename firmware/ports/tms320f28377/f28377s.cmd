@@ -5,6 +5,8 @@
  * 8 words (128-bit ECC words).  The controller step (.TI.ramfunc, set by the
  * generated code's #pragma CODE_SECTION) and flash_init are copied from
  * flash to GS RAM at boot (BINIT copy table).
+ * BEGIN holds section codestart: one LB (2 words, codestart.c), checked
+ * by tests/firmware/test_port_layout.py since cl2000 does not run here.
  */
 MEMORY
 {
