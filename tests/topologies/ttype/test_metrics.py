@@ -141,9 +141,10 @@ def test_metrics_and_plots_of_a_run(stub, tmp_path):
         # window statistics: the psi reference is the controller's
         psi_ref = tr.psi_ref_wb.astype(float)
         assert r["psi_rip_RMSE_wb"] == pytest.approx(float(np.sqrt(np.mean((tr.psi_wb - psi_ref) ** 2))))
-        paths = plot_three_level(tr, model, f"stub{m_}", 3000, tmp_path)
+        paths = plot_three_level(tr, model, f"stub{m_}_3000rpm", "3000 r/min", tmp_path, r)
         assert sorted(p.name for p in paths) == sorted(
-            f"stub{m_}_3000rpm_{w}.png" for w in ("torque", "flux", "currents", "vo", "uab"))
+            f"stub{m_}_3000rpm_{w}.png" for w in ("speed", "torque", "flux", "locus", "currents", "spectrum", "vo",
+                                                 "uab"))
         for p in paths:
             data = p.read_bytes()
             assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 5_000
