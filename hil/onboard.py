@@ -60,7 +60,6 @@ from .messages import (
     ProtocolError,
     RunEnd,
     parse_error,
-    parse_info,
     parse_run_end,
     parse_telemetry,
     setpoints_payload,
@@ -330,13 +329,9 @@ def run_on_board(session: Session, periods: int, decimation: int, steps: list[tu
                         suspect, cur.outcome = now, f"ERROR {err.name} (detail {err.detail})"
                 elif item.type == Msg.INFO:
                     wire.resets += 1
-                    try:
-                        info = parse_info(schema, item.payload)
-                    except ProtocolError:
+                    if not session.adopt_info(item.payload):
                         wire.discarded["layout"] += 1
                         continue
-                    session.check(info)
-                    session.info = info
                     cur.outcome = "board reset"
                     return
                 else:

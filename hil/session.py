@@ -159,6 +159,18 @@ class Session:
         self._seq = (self._seq + n) & 0xFFFF
         return seq
 
+    def adopt_info(self, payload: bytes) -> bool:
+        """An INFO the board sent unasked (it reset): parsed, checked against this run's hashes
+        (:class:`BoardMismatch` if another build answers) and kept; False when its layout is not this
+        protocol's (the caller counts a discarded frame)."""
+        try:
+            info = parse_info(self.schema, payload)
+        except ProtocolError:
+            return False
+        self.check(info)
+        self.info = info
+        return True
+
     def handshake(self, attempts: int = 5) -> BoardInfo:
         """HELLO until INFO answers it; the board's INFO, checked against this run's hashes."""
         for attempt in range(attempts):
@@ -319,13 +331,9 @@ class Session:
                     take_result(item)
                 elif item.type == Msg.INFO:
                     stats.resets += 1
-                    try:
-                        info = parse_info(s, item.payload)
-                    except ProtocolError:
+                    if not self.adopt_info(item.payload):
                         stats.discarded["length"] += 1
                         continue
-                    self.check(info)
-                    self.info = info
                     for unit in list(inflight.values()):
                         requeue(unit)
                 elif item.type == Msg.ERROR:
