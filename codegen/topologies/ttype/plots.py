@@ -17,16 +17,7 @@ import numpy as np
 from codegen.metrics import sample_time
 from codegen.model import Model
 from codegen.plotting import heading, new_figure, plot_lines, save_figure, span
-from codegen.simulator.figures import (
-    plot_flux_locus,
-    plot_phase_currents,
-    plot_spectrum,
-    plot_speed,
-    plot_torque,
-    run_span,
-    thd_span,
-    zoom_slice,
-)
+from codegen.simulator import figures
 
 if TYPE_CHECKING:  # pragma: no cover
     from codegen.topologies.ttype.sim import Trace
@@ -64,22 +55,22 @@ def plot_three_level(trace: Trace, model: Model, tag: str, run: str, outdir: str
     title = f"{model.name}: {run}"
     t = trace.t_s
     dt = trace.dt_s
-    tw = thd_span(metrics)
+    tw = figures.thd_span(metrics)
     f1 = tw[2] if tw is not None else 0.0
     k_end = min(trace.n, int(round((tw[1] if tw is not None else trace.n * dt) / dt)))
     psi_ref = trace.psi_ref_wb.astype(np.float64)
     paths = [
-        plot_speed(out / f"{tag}_speed.png", title, trace),
-        plot_torque(out / f"{tag}_torque.png", title, trace),
-        plot_lines(out / f"{tag}_flux.png", heading(title, f"stator-flux magnitude, {run_span(trace)}"),
+        figures.plot_speed(out / f"{tag}_speed.png", title, trace),
+        figures.plot_torque(out / f"{tag}_torque.png", title, trace),
+        plot_lines(out / f"{tag}_flux.png", heading(title, f"stator-flux magnitude, {figures.run_span(trace)}"),
                    "stator flux |psi_s| / Wb", t, [
                        (trace.psi_wb, "plant |psi_s|", {"color": "tab:blue", "lw": 0.4}),
                        (psi_ref, "controller psi*", {"color": "k", "lw": 1.0}),
                    ]),
-        plot_flux_locus(out / f"{tag}_locus.png", title, trace, model, metrics, psi_ref),
-        plot_phase_currents(out / f"{tag}_currents.png", title, trace, zoom_slice(trace, metrics, fallback_s=0.02)),
-        plot_spectrum(out / f"{tag}_spectrum.png", title, trace.ia_a, dt, metrics),
-        plot_lines(out / f"{tag}_vo.png", heading(title, f"neutral-point voltage, {run_span(trace)}"), "V_o / V", t,
+        figures.plot_flux_locus(out / f"{tag}_locus.png", title, trace, model, metrics, psi_ref),
+        figures.plot_phase_currents(out / f"{tag}_currents.png", title, trace, figures.zoom_slice(trace, metrics, fallback_s=0.02)),
+        figures.plot_spectrum(out / f"{tag}_spectrum.png", title, trace.ia_a, dt, metrics),
+        plot_lines(out / f"{tag}_vo.png", heading(title, f"neutral-point voltage, {figures.run_span(trace)}"), "V_o / V", t,
                    [(trace.vo_v, "plant V_o = (u_c1 - u_c2)/2", {"color": "tab:blue", "lw": 0.5})],
                    hline=(0.0, "")),
     ]
