@@ -68,8 +68,9 @@ def sources(model: Model, target: str | None = None, tables: Any = None) -> dict
     derived tables when the caller has them (derived here otherwise)."""
     t = model.target if target is None else target
     topo = topology_of(model)
-    files = topo.render(model, topo.derive(model) if tables is None else tables, t)
-    files.update(render_speed_pi(model, t))
+    tables = topo.derive(model) if tables is None else tables
+    files = topo.render(model, tables, t)
+    files.update(render_speed_pi(model, t, getattr(tables, "scaling", None)))
     return files
 
 

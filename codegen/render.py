@@ -22,6 +22,7 @@ from codegen.kernels.trig import cos_names, horner_order, poly_text, sin_names, 
 from codegen.model import Model
 from codegen.numfmt import NumberFormat, number_format
 from codegen.numfmt.float32 import FLOAT32
+from codegen.numfmt.interface import field_formats
 from codegen.outputs import output_error, write_atomic
 from codegen.records import REAL, Record
 from codegen.resources import templates_dir
@@ -154,6 +155,8 @@ def step_context(model: Model, target: str, records: tuple[Record, Record],
         **nf.template_values(),
         "real_fields": [{"name": f.name, "q": nf.scaling.q(f.unit) if nf.scaling else 0}
                         for f in real],
+        # fixed point: each real field's Q format (the header's comments and defines, the binding's helpers)
+        "field_formats": field_formats(nf.scaling, real, [f.name for f in records[0].fields]),
         "faults": faults,
         "guard_bits": {name: bits for name, bits in guard_bits.items() if bits is not None},
         "dt_s": model.controller.dt_s,
@@ -182,8 +185,8 @@ def render_step_cdef(ctx: dict[str, Any]) -> str:
     return render_files({"cdef": "common/cdef.h.j2"}, ctx)["cdef"]
 
 
-#: the speed PI's number format, whatever the step's: the outer loop is not part of the verified
-#: MPC step, and a fixed-point MPC step keeps its float32 speed loop (no FPU: software float)
+#: the speed PI's number format beside a float step; a fixed-point step gets the integer PI in its
+#: own Q formats (``codegen.numfmt.speedpi``)
 SPEED_PI_FORMAT = FLOAT32
 
 
@@ -198,14 +201,19 @@ def speed_pi_constants(model: Model) -> list[Const]:
     ]
 
 
-def render_speed_pi(model: Model, target: str) -> dict[str, str]:
-    """File name -> text of the portable speed PI, ``<prefix>_speed_pi.h`` and ``.c`` (float32,
-    ``SPEED_PI_FORMAT``)."""
+def render_speed_pi(model: Model, target: str, scaling: Any = None) -> dict[str, str]:
+    """File name -> text of the portable speed PI, ``<prefix>_speed_pi.h`` and ``.c``: float32
+    (``SPEED_PI_FORMAT``) beside a float step; with the fixed-point step's ``scaling``, integer in its Q
+    formats (``codegen.numfmt.speedpi``; RepresentationError if a gain or the clamp does not fit)."""
     nf = SPEED_PI_FORMAT
     sl = model.speed_loop
     ctx = {**base_context(model, target), "number_format": nf.name, "numfmt": nf.macros,
            "consts": speed_pi_constants(model), "real": nf.c_type,
            "kp": sl.kp, "ki": sl.ki, "limit_nm": sl.limit_nm, "dt_s": model.controller.dt_s}
+    if scaling is not None:
+        from codegen.numfmt.speedpi import FixedSpeedPI
+
+        ctx.update(FixedSpeedPI.of(sl.kp, sl.ki * model.controller.dt_s, sl.limit_nm, scaling).template_values())
     p = model.prefix
     return render_files({f"{p}_speed_pi.h": "common/speed_pi.h.j2", f"{p}_speed_pi.c": "common/speed_pi.c.j2"}, ctx)
 

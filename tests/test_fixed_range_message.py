@@ -79,3 +79,20 @@ def test_global_q_names_fixed_q_and_the_nearest_that_holds(tmp_path: Path,
     rc, err = _generate(tmp_path, capsys, SPMSM, "controller.fixed_q=24", "controller.tables=published")
     assert rc == 2 and ": controller.fixed_q = 24: " in err, err
     assert "no global Q holds the step" in err or re.search(r"controller\.fixed_q to \d+ \(the nearest", err), err
+
+
+@pytest.mark.parametrize("sets", [("controller.dt_s=1e-3",), ("motor.ld_h=1e-5", "motor.lq_h=1e-5")],
+                         ids=["dt_1ms", "ld_lq_10uH"])
+@pytest.mark.parametrize("cfg", [SPMSM, TTYPE], ids=lambda p: p.stem)
+def test_power_of_two_widest_value_gets_its_integer_bit(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                                        cfg: Path, sets: tuple[str, ...]) -> None:
+    """Issue 27: with a 1 ms period the T-type's widest scaled value is the angle guard, 8 rad = 2^3 exactly;
+    the format gave it 3 integer bits (|x| < 16 with the margin 2 needs 4) and blamed
+    controller.number_format.  Every such config now gets valid C (or one line naming a field)."""
+    rc, err = _generate(tmp_path, capsys, cfg, *sets)
+    assert "Traceback" not in err
+    assert "controller.number_format sets this value" not in err, err
+    if rc == 0:
+        assert next((tmp_path / "o").glob("*_mpc.c")).stat().st_size > 0
+    else:
+        assert rc == 2 and re.search(r": (motor|controller|inverter)\.\w+ = ", err), err

@@ -21,9 +21,17 @@ from_int   ``sat(n * 2^G)``
 ``templates/numfmt/fixed.j2`` (small helper functions with no undefined or
 implementation-defined behaviour: no signed overflow, no shift of a
 negative value).
+
+:func:`count_saturations` records, while it is active, which lanes each
+saturating operation saturated, per call site of the reference (the
+quantisation report and ``verify`` count the states that saturate each one).
 """
 from __future__ import annotations
 
+import contextlib
+import os
+import sys
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -33,11 +41,82 @@ from .lanes import LaneOps
 from .scaling import INT32_MAX, INT32_MIN, BaseRanges, Scaling, Signal, choose_scaling
 from .trigform import SinCosForm
 
-__all__ = ["FixedOps", "Fixed", "FIXED", "isqrt64"]
+__all__ = ["FixedOps", "Fixed", "FIXED", "isqrt64", "SaturationCount", "count_saturations"]
 
 
-def _sat(x: Any) -> np.ndarray:
-    return np.clip(np.asarray(x, np.int64), INT32_MIN, INT32_MAX).astype(np.int32)
+class SaturationCount:
+    """Which states saturated each saturating operation of a reference run over ``n`` states.
+
+    ``sites``: per call site (``"q_div at ttype/reference.py:236"``: the C helper's name and the
+    reference line that calls the operation, outside the format's own modules), a boolean array over
+    the states: True where some lane of that state saturated (its exact int64 result lay outside
+    int32).  Lanes are the reference's: a batch's leading axis is the state, further axes (the
+    candidates) are reduced; an operation on a value with no state axis (constants) marks every state.
+    """
+
+    def __init__(self, n: int) -> None:
+        self.n = n
+        self.sites: dict[str, np.ndarray] = {}
+
+    def note(self, op: str, exact: np.ndarray) -> None:
+        """Record the lanes of ``exact`` (the operation's int64 result before saturation) outside int32."""
+        over = (exact < INT32_MIN) | (exact > INT32_MAX)
+        if not over.any():
+            return
+        per_state: np.ndarray
+        if over.ndim >= 1 and over.shape[0] == self.n:
+            per_state = np.asarray(over.reshape(self.n, -1).any(axis=1))
+        else:
+            per_state = np.ones(self.n, bool)
+        key = f"q_{op} at {_call_site()}"
+        seen = self.sites.get(key)
+        self.sites[key] = per_state if seen is None else np.asarray(seen | per_state)
+
+    def counts(self, among: np.ndarray | None = None) -> dict[str, int]:
+        """States per site that saturated, among the states ``among`` (a boolean mask; every state for
+        None), sites in name order, sites with no such state left out."""
+        out = {}
+        for key in sorted(self.sites):
+            k = int((self.sites[key] & among).sum()) if among is not None else int(self.sites[key].sum())
+            if k:
+                out[key] = k
+        return out
+
+
+#: the active recorder of :func:`count_saturations` (None: operations are not watched)
+_RECORDER: list[SaturationCount] = []
+#: the format's own modules: a call site is the first frame outside them
+_OWN = (os.path.dirname(os.path.abspath(__file__)),)
+
+
+def _call_site() -> str:
+    """``dir/file.py:line`` of the innermost caller outside codegen/numfmt (the reference's line)."""
+    f = sys._getframe(2)
+    while f is not None and os.path.dirname(os.path.abspath(f.f_code.co_filename)) in _OWN:
+        f = f.f_back  # type: ignore[assignment]
+    if f is None:
+        return "?"
+    path = os.path.abspath(f.f_code.co_filename)
+    return f"{os.path.basename(os.path.dirname(path))}/{os.path.basename(path)}:{f.f_lineno}"
+
+
+@contextlib.contextmanager
+def count_saturations(n: int) -> Iterator[SaturationCount]:
+    """While active, every saturating operation of :class:`FixedOps` on a batch of ``n`` states is
+    recorded (:class:`SaturationCount`); not reentrant."""
+    rec = SaturationCount(n)
+    _RECORDER.append(rec)
+    try:
+        yield rec
+    finally:
+        _RECORDER.remove(rec)
+
+
+def _sat(x: Any, op: str = "") -> np.ndarray:
+    x = np.asarray(x, np.int64)
+    if _RECORDER and op:
+        _RECORDER[-1].note(op, x)
+    return np.clip(x, INT32_MIN, INT32_MAX).astype(np.int32)
 
 
 def _i64(x: Any) -> np.ndarray:
@@ -70,14 +149,14 @@ class FixedOps(LaneOps):
         return np.int32(self.scaling.const(x, ""))
 
     def add(self, a: Any, b: Any) -> np.ndarray:
-        return _sat(_i64(a) + _i64(b))
+        return _sat(_i64(a) + _i64(b), "add")
 
     def sub(self, a: Any, b: Any) -> np.ndarray:
-        return _sat(_i64(a) - _i64(b))
+        return _sat(_i64(a) - _i64(b), "sub")
 
     def mul(self, a: Any, b: Any) -> np.ndarray:
         # numpy's >> on int64 is an arithmetic shift: floor division by 2^G
-        return _sat((_i64(a) * _i64(b) + self.half) >> self.g)
+        return _sat((_i64(a) * _i64(b) + self.half) >> self.g, "mul")
 
     def div(self, a: Any, b: Any) -> np.ndarray:
         a, b = np.broadcast_arrays(_i64(a), _i64(b))
@@ -85,17 +164,17 @@ class FixedOps(LaneOps):
         d = np.abs(b)
         safe = np.where(d == 0, 1, d)
         q = np.floor_divide(2 * n + safe, 2 * safe)
-        return _sat(np.where(d == 0, 0, q))
+        return _sat(np.where(d == 0, 0, q), "div")
 
     def neg(self, a: Any) -> np.ndarray:
-        return _sat(-_i64(a))
+        return _sat(-_i64(a), "neg")
 
     def abs(self, a: Any) -> np.ndarray:
-        return _sat(np.abs(_i64(a)))
+        return _sat(np.abs(_i64(a)), "abs")
 
     def sqrt(self, a: Any) -> np.ndarray:
         a = _i64(a)
-        return _sat(np.where(a > 0, isqrt64(np.maximum(a, 0) << self.g), 0))
+        return _sat(np.where(a > 0, isqrt64(np.maximum(a, 0) << self.g), 0), "sqrt")
 
     def trunc_int(self, a: Any) -> np.ndarray:
         a = _i64(a)
@@ -103,7 +182,7 @@ class FixedOps(LaneOps):
         return np.where(a < 0, -m, m).astype(np.int32)
 
     def from_int(self, n: Any) -> np.ndarray:
-        return _sat(_i64(n) << self.g)
+        return _sat(_i64(n) << self.g, "from_int")
 
     def rank_lt(self, a: Any, b: Any) -> np.ndarray:
         """Cost ranking: the counts' order."""

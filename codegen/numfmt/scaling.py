@@ -190,7 +190,9 @@ def _best_bases(sigs: list[Signal], base: BaseRanges) -> tuple[tuple[int, int, i
             for ds in rng:
                 e = nat + np.array([dv, da, ds])
                 scaled = logs - dims @ e
-                need = max(0, math.ceil(float(np.max(scaled))))
+                # integer bits such that every scaled magnitude is below 2^need: a magnitude of exactly
+                # 2^n needs n + 1 (the largest count is 2^31 - 1, not 2^31)
+                need = max(0, math.floor(float(np.max(scaled))) + 1)
                 small = float(np.min(scaled[exact])) if exact.any() else 0.0
                 key = (need, -small, abs(dv) + abs(da) + abs(ds))
                 if best is None or key < best[0]:

@@ -33,6 +33,7 @@ from codegen.stages.firmware import (
     EMULATED_BOARD,
     ICOUNT_SHIFT,
     QEMU,
+    board_spec,
     build_firmware,
     make_test_sets,
     qemu_command,
@@ -108,16 +109,21 @@ def build_progress(project: Path) -> str:
 
 
 def run_qemu(elf: Path, *, timeout_s: float = 120.0, icount_shift: int = ICOUNT_SHIFT,
-             progress: Callable[[str], None] | None = None, poll_s: float = 1.0) -> QemuRun:
-    """Run ``elf`` until it exits (semihosting) or ``timeout_s`` passes; QEMU is always ended.
-    ``progress``: called every ``poll_s`` seconds with how far the image got (:func:`uart_progress`)."""
+             progress: Callable[[str], None] | None = None, poll_s: float = 1.0,
+             board: str = EMULATED_BOARD) -> QemuRun:
+    """Run ``elf`` of the emulated ``board`` (qemu-m7, qemu-m3) until it exits (semihosting) or
+    ``timeout_s`` passes; QEMU is always ended.  ``progress``: called every ``poll_s`` seconds with
+    how far the image got (:func:`uart_progress`)."""
     require_tools((QEMU,))
+    machine = board_spec(board).qemu
+    if machine is None:
+        raise EmulationError(f"board {board} is not emulated: QEMU runs {', '.join(_emulated())}")
     elf = Path(elf)
     if not elf.is_file():
-        raise EmulationError(f"firmware image {elf} does not exist: build the qemu-m7 project first")
+        raise EmulationError(f"firmware image {elf} does not exist: build the {board} project first")
     with tempfile.TemporaryDirectory(prefix="mpcgen-qemu-") as tmp:
         uart = Path(tmp) / "uart.log"
-        proc = subprocess.Popen(qemu_command(elf, f"file:{uart}", icount_shift), stdin=subprocess.DEVNULL,
+        proc = subprocess.Popen(qemu_command(elf, f"file:{uart}", icount_shift, machine), stdin=subprocess.DEVNULL,
                                 stdout=subprocess.PIPE, stderr=subprocess.STDOUT, start_new_session=True)
         timed_out = False
         out = b""
@@ -140,6 +146,12 @@ def run_qemu(elf: Path, *, timeout_s: float = 120.0, icount_shift: int = ICOUNT_
         text = uart.read_text(errors="replace") if uart.exists() else ""
     return QemuRun(None if timed_out else proc.returncode, text.replace("\r", ""),
                    out.decode(errors="replace"), timed_out, proc.pid)
+
+
+def _emulated() -> list[str]:
+    from codegen.stages.firmware import BOARDS
+
+    return [b.name for b in BOARDS.values() if b.qemu is not None]
 
 
 # ---------------------------------------------------------------- parsing
@@ -253,8 +265,9 @@ class StrategyCounts:
 
 def run_and_check(model: Model, tables: Any, workdir: Path, *, n_selftest: int = 10000,
                   n_bench: int = N_BENCH, icount_shift: int = ICOUNT_SHIFT, timeout_s: float = 300.0,
-                  log: Callable[[str], None] | None = None) -> StrategyCounts:
-    """Write, build and run one qemu-m7 image; check it against the reference; count instructions.
+                  log: Callable[[str], None] | None = None, board: str = EMULATED_BOARD) -> StrategyCounts:
+    """Write, build and run one image of the emulated ``board`` (qemu-m7; qemu-m3: no FPU); check it
+    against the reference; count instructions.
 
     The firmware compares every output with its embedded expected outputs;
     independently, the host recomputes the CRC-32 of all inputs and outputs
@@ -270,11 +283,11 @@ def run_and_check(model: Model, tables: Any, workdir: Path, *, n_selftest: int =
     label = f"{tables.strategy} ({model.controller.number_format})"
     with phase(log, f"{label}: writing the firmware project (reference outputs of {n_selftest} self-test "
                     f"and {n_bench} bench states)"):
-        write_firmware_project(model, tables, EMULATED_BOARD, workdir, n_selftest, n_bench=n_bench)
+        write_firmware_project(model, tables, board, workdir, n_selftest, n_bench=n_bench)
     with phase(log, f"{label}: compiling and linking the image (make)", probe=lambda: build_progress(workdir)):
-        build = build_firmware(workdir, EMULATED_BOARD)
+        build = build_firmware(workdir, board)
     with phase(log, f"{label}: running the image in QEMU") as p:
-        run = run_qemu(build.image, timeout_s=timeout_s, icount_shift=icount_shift, progress=p.note)
+        run = run_qemu(build.image, timeout_s=timeout_s, icount_shift=icount_shift, progress=p.note, board=board)
     if run.timed_out:
         raise EmulationError(f"QEMU did not finish within {timeout_s} s (killed); last output: {run.uart[-300:]!r}")
     rep = parse_console(run.uart)

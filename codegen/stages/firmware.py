@@ -48,10 +48,16 @@ from codegen.topology import topology_of
 
 RUNTIME_FILES = ("main.c", "console.c", "console.h", "mpc_runtime.c", "mpc_runtime.h",
                  "selftest.c", "selftest.h", "port.h")
-ARM_CFLAGS = ("-mcpu=cortex-m7", "-mthumb", "-mfpu=fpv5-d16", "-mfloat-abi=hard", "-O2",
-              "-ffp-contract=off", "-fno-math-errno", "-std=c99", "-Wall", "-Wextra", "-Wconversion",
-              "-Wdouble-promotion", "-Werror", "-fstack-usage", "-fcallgraph-info=su",
-              "-ffunction-sections", "-fdata-sections", "-g")
+#: the core of the Cortex-M7 boards: FPv5 double-precision FPU, hard-float ABI
+M7_CPU_FLAGS = ("-mcpu=cortex-m7", "-mthumb", "-mfpu=fpv5-d16", "-mfloat-abi=hard")
+#: a core without FPU (Cortex-M3, qemu-m3): every float operation, if any, is libgcc's software float
+M3_CPU_FLAGS = ("-mcpu=cortex-m3", "-mthumb", "-mfloat-abi=soft")
+#: the flags every Arm board compiles with after its core's
+ARM_COMMON_CFLAGS = ("-O2", "-ffp-contract=off", "-fno-math-errno", "-std=c99", "-Wall", "-Wextra", "-Wconversion",
+                     "-Wdouble-promotion", "-Werror", "-fstack-usage", "-fcallgraph-info=su",
+                     "-ffunction-sections", "-fdata-sections", "-g")
+#: the Cortex-M7 boards' compiler flags (stm32h743, qemu-m7)
+ARM_CFLAGS = M7_CPU_FLAGS + ARM_COMMON_CFLAGS
 #: runtime files of the serial protocol (serial protocol builds only)
 PROTOCOL_RUNTIME_FILES = ("hil_proto.c", "hil_proto.h", "hil_cobs.c", "hil_cobs.h", "hil_wire.c", "hil_wire.h",
                           "onboard.c", "onboard.h")
@@ -97,10 +103,12 @@ class Tool:
 ICOUNT_SHIFT = 10
 
 
-def qemu_command(elf: str | Path, serial: str, icount_shift: int = ICOUNT_SHIFT) -> list[str]:
-    """The emulated board's QEMU command line: mps2-an500 Cortex-M7, headless, semihosting exit,
-    -icount (instructions counted by SysTick), UART0 to ``serial`` (``stdio``, ``file:PATH``, ...)."""
-    return ["qemu-system-arm", "-M", "mps2-an500", "-cpu", "cortex-m7", "-m", "16M",
+def qemu_command(elf: str | Path, serial: str, icount_shift: int = ICOUNT_SHIFT,
+                 machine: tuple[str, str] = ("mps2-an500", "cortex-m7")) -> list[str]:
+    """An emulated board's QEMU command line: ``machine`` (QEMU machine, CPU; default the qemu-m7
+    board's mps2-an500 Cortex-M7), headless, semihosting exit, -icount (instructions counted by
+    SysTick), UART0 to ``serial`` (``stdio``, ``file:PATH``, ...)."""
+    return ["qemu-system-arm", "-M", machine[0], "-cpu", machine[1], "-m", "16M",
             "-display", "none", "-monitor", "none",
             "-semihosting-config", "enable=on,target=native",
             "-icount", f"shift={icount_shift}", "-kernel", str(elf), "-serial", serial]
@@ -119,6 +127,13 @@ class Board:
     tools: tuple[Tool, ...]
     doc: str
     run: str = ""  # `make run` command line (empty: the board has no run target)
+    cpu_flags: tuple[str, ...] = M7_CPU_FLAGS  # Arm: the core's compiler and linker flags
+    qemu: tuple[str, str] | None = None  # an emulated board's QEMU (machine, cpu)
+    #: Arm: the port folder holding stackdepth.sh, and the function the stack depth is counted from
+    stack_dir: str = "cortex-m7"
+    stack_root: str = "Reset_Handler"
+    #: files of other port folders the project needs (``folder/name``: a shared script)
+    extra_files: tuple[str, ...] = ()
 
 
 ARM_GCC = Tool("arm-none-eabi-gcc", "install the Debian packages gcc-arm-none-eabi and libnewlib-arm-none-eabi "
@@ -131,6 +146,10 @@ CL2000 = Tool("cl2000", "TI's C2000 code generation tools are not packaged by De
 
 #: the emulated Cortex-M7 (QEMU mps2-an500): the board of ``bench --emulated`` and of ``hil --board``
 EMULATED_BOARD = "qemu-m7"
+#: the emulated core without FPU (QEMU mps2-an385, Cortex-M3, -mfloat-abi=soft): fixed point's board
+NOFPU_BOARD = "qemu-m3"
+_QEMU_M7 = ("mps2-an500", "cortex-m7")
+_QEMU_M3 = ("mps2-an385", "cortex-m3")
 
 #: every board a firmware project is written for, by name (its port folder under firmware/ports/)
 BOARDS: dict[str, Board] = {b.name: b for b in (
@@ -138,7 +157,12 @@ BOARDS: dict[str, Board] = {b.name: b for b in (
           1792 * 1024, (ARM_GCC, MAKE), "NUCLEO-H743ZI2, 400 MHz, step in ITCM, tables in DTCM"),
     Board(EMULATED_BOARD, "stm32h743", "arm", ("cortex-m7", EMULATED_BOARD), "qemu_m7.ld",
           3584 * 1024, (ARM_GCC, MAKE, QEMU), "QEMU mps2-an500 emulated Cortex-M7",
-          " ".join(qemu_command("$(IMAGE)", "stdio"))),
+          " ".join(qemu_command("$(IMAGE)", "stdio", machine=_QEMU_M7)), qemu=_QEMU_M7),
+    # no tightly coupled memories and no FPU: the host profile's C (no placement attributes)
+    Board(NOFPU_BOARD, "host", "arm", (NOFPU_BOARD,), "qemu_m3.ld", 3584 * 1024, (ARM_GCC, MAKE, QEMU),
+          "QEMU mps2-an385 emulated Cortex-M3, no FPU (-mfloat-abi=soft)",
+          " ".join(qemu_command("$(IMAGE)", "stdio", machine=_QEMU_M3)), M3_CPU_FLAGS, _QEMU_M3,
+          NOFPU_BOARD, "m3_reset", ("cortex-m7/stackdepth.sh",)),
     Board("tms320f28377", "tms320f28377", "c28x", ("tms320f28377",), "f28377s.cmd",
           448 * 1024, (CL2000,), "LAUNCHXL-F28377S, C28x + FPU32 at 200 MHz"),
     Board("host", "host", "host", ("host",), "", None, (HOST_GCC, MAKE),
@@ -260,6 +284,8 @@ def write_firmware_project(model: Model, tables: Any, board: str, outdir: Path,
         for p in sorted((fw / "ports" / d).iterdir()):
             if p.is_file():
                 files[f"firmware/ports/{d}/{p.name}"] = p.read_text()
+    for f in spec.extra_files:
+        files[f"firmware/ports/{spec.stack_dir}/{Path(f).name}"] = (fw / "ports" / f).read_text()
     inp, out = layouts(model)
     env = environment()
     env.filters["c_value"] = lambda v, kind: inp.nf.c_value(v) if kind == REAL else f"{int(v)}u"
@@ -275,7 +301,7 @@ def write_firmware_project(model: Model, tables: Any, board: str, outdir: Path,
     files["gen/mpc_values.c"] = env.get_template("firmware/values.c.j2").render(ctx)
     files["gen/mpc_selftest_data.c"] = env.get_template("firmware/selftest_data.c.j2").render(ctx)
     written = write_files(files, outdir)
-    mk = {"board": spec, "sources": _sources(spec, outdir, model.prefix, protocol), "arm_cflags": ARM_CFLAGS,
+    mk = {"board": spec, "sources": _sources(spec, outdir, model.prefix, protocol), "arm_cflags": spec.cpu_flags + ARM_COMMON_CFLAGS,
           "defines": [protocol.define] if protocol is not None else [],
           "host_cflags": HOST_CFLAGS, "includes": ["gen", "firmware/runtime",
                                                    *[f"firmware/ports/{d}" for d in spec.port_dirs]],

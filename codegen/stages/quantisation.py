@@ -19,7 +19,12 @@ c. decision agreement with the float32 controller (``vector``, and ``sw``
    closed-loop states and over random states, both controllers seeing the
    same physical state (float32 states converted once to the fixed format);
 d. the closed-loop metrics of the fixed controller next to its float32 twin
-   (the topology's ``simulate`` for both).
+   (the topology's ``simulate`` for both);
+e. saturation inside the guard's limits: per saturating operation of the
+   fixed step (``codegen.numfmt.fixed.count_saturations``: the C helper and
+   the reference line calling it), the states of each set that pass the
+   input guard and saturate it (numerics.md "Saturation inside the guard's
+   limits": where it can happen and why it is benign).
 
 :data:`FLOAT64` (``codegen.numfmt.float64``) is an analysis-only number format (no C, no
 firmware, not a config choice).
@@ -37,6 +42,7 @@ from codegen.errors import UsageError
 from codegen.kernels.trig import sincos_constants
 from codegen.model import Model
 from codegen.numfmt import FLOAT_CONTROLLER, IDEAL, QUANTISED, number_format
+from codegen.numfmt.fixed import count_saturations
 from codegen.records import REAL, Record, RecordLayout
 from codegen.stages.fwdata import evenly_spaced
 from codegen.teststates import in_format
@@ -62,6 +68,8 @@ def fixed_twin(model: Model) -> Model:
 
 #: bins of the error histograms
 HIST_BINS = 41
+#: adversarial states (the topology's guard-edge cases) the saturation counts add to the analysed sets
+ADVERSARIAL_STATES = 20_000
 
 
 def _stats(err: np.ndarray, hist: bool = False) -> dict[str, Any]:
@@ -170,6 +178,18 @@ def _errors(topo: Any, output: Record, t_fx: Any, t32: Any, t_64: Any, x_fx: np.
     return res
 
 
+def _saturations(topo: Any, t_fx: Any, sets: dict[str, np.ndarray]) -> dict[str, Any]:
+    """Per set of fixed states: the states passing the input guard and, per saturating operation, how
+    many of them saturate it (sites with none left out)."""
+    out = {}
+    for key, x in sets.items():
+        with count_saturations(len(x)) as rec:
+            o = topo.step_batch(t_fx, x)
+        ok = o["fault"] == 0
+        out[key] = {"states": len(x), "passing": int(ok.sum()), "sites": rec.counts(ok)}
+    return out
+
+
 def _runs(strategy_result: dict[str, Any]) -> dict[str, dict[str, Any]]:
     """The runs of one strategy's simulate result: {run: metrics} (a single-run result is "scenario")."""
     if "T_rip_RMSE_nm" in strategy_result:
@@ -253,6 +273,9 @@ def analyse(model: Model, strategies: list[str] | None = None, random_states: in
             "agreement": {"closed_loop": _agreement(topo, t_32, t_fx, cl32, cl_fx),
                           "closed_loop_fixed": _agreement(topo, t_32, t_fx, own32, own_fx),
                           "random": _agreement(topo, t_32, t_fx, rnd32, rnd_fx)},
+            "saturations": _saturations(topo, t_fx, {
+                "closed_loop": cl_fx, "closed_loop_fixed": own_fx, "random": rnd_fx,
+                "adversarial": topo.adversarial_states(m_fx, t_fx, ADVERSARIAL_STATES)}),
         }
     out: dict[str, Any] = {"config": model.name, "config_hash": model.config_hash(), "topology": topo.name,
                            "strategies": per}

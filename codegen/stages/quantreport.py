@@ -31,6 +31,7 @@ _SETS = {
     "closed_loop": "float32 closed-loop states (converted to fixed)",
     "closed_loop_fixed": "fixed closed-loop states (converted to float32)",
     "random": "random states (float32, converted to fixed)",
+    "adversarial": "adversarial states (guard edges, fixed)",
 }
 
 
@@ -99,6 +100,22 @@ def _agreement(d: dict[str, Any]) -> list[str]:
     return lines
 
 
+def _saturation(d: dict[str, Any]) -> list[str]:
+    """States passing the input guard that saturate each saturating operation, per set."""
+    sat = d.get("saturations", {})
+    lines = ["", "Operations whose exact result left the int32 range on states that pass the input guard "
+                 "(the C helper and the reference line that calls it; each such result is the int32 extreme, "
+                 "numerics.md \"Saturation inside the guard's limits\" says where this can happen and why it "
+                 "is benign).", "",
+             "| states | passing the guard | operation | states saturating it |", "|---|---|---|---|"]
+    for key, v in sat.items():
+        if not v["sites"]:
+            lines.append(f"| {_SETS.get(key, key)} | {v['passing']} | none | 0 |")
+        for site, k in v["sites"].items():
+            lines.append(f"| {_SETS.get(key, key)} | {v['passing']} | `{site}` | {k} ({_pct(k / v['passing'])}) |")
+    return lines
+
+
 def _closed_loop(d: dict[str, Any]) -> list[str]:
     lines = ["", "| run | metric | fixed | float32 | fixed / float32 |", "|---|---|---|---|---|"]
     for run, row in d["closed_loop"].items():
@@ -149,6 +166,8 @@ def markdown(model: Model, data: dict[str, Any], hashes: Mapping[str, str],
             lines += _formats(d)
         lines += ["", "### Prediction error against the float64 ideal", *_errors(d)]
         lines += ["", "### Decision agreement with the float32 controller", *_agreement(d)]
+        if "saturations" in d:
+            lines += ["", "### Saturation inside the guard's limits", *_saturation(d)]
         if "closed_loop" in d:
             lines += ["", "### Closed loop: fixed vs float32", *_closed_loop(d)]
         for f in (plot_files or {}).get(s, []):

@@ -12,6 +12,12 @@ host C compiled and compared, and the C ``generate`` writes for the config's
 target (the same arithmetic: target profiles differ only in placement
 attributes and comments).  Topology-agnostic: everything topology-specific
 comes from the plugin.
+
+A quantised (fixed-point) step's reference also counts, per saturating
+operation (``codegen.numfmt.fixed.count_saturations``: the C helper and the
+reference line calling it), how many of the states that pass the input
+guard saturate it (``StrategyResult.saturations``; numerics.md "Saturation
+inside the guard's limits").
 """
 from __future__ import annotations
 
@@ -31,6 +37,8 @@ from codegen.compare import describe_mismatch, mismatch_mask
 from codegen.errors import UsageError
 from codegen.manifest import c_hash_of, sources
 from codegen.model import Model
+from codegen.numfmt import number_format
+from codegen.numfmt.fixed import count_saturations
 from codegen.stages.fwdata import evenly_spaced
 from codegen.topology import topology_of
 
@@ -64,6 +72,9 @@ class StrategyResult:
     compiled_target: str = ""
     #: C hash of that host C: what was compiled (``c_hash`` too when ``c_hash_target`` is the host)
     compiled_c_hash: str = ""
+    #: fixed point: per saturating operation (``q_div at ttype/reference.py:236``), the states passing
+    #: the input guard on which it saturated (empty: none did, or a float format)
+    saturations: dict[str, int] = field(default_factory=dict)
 
     def as_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -93,9 +104,24 @@ def verify_strategy(
     parts["adversarial"] = topo.adversarial_states(model, tables, max(n_adv, 1000))[:n_adv]
     n_random = max(n_states - sum(len(p) for p in parts.values()), 0)
     parts["random"] = topo.random_states(model, tables, n_random, RANDOM_SEED)
-    result = compare_batches(model.controller.strategy, parts, functools.partial(topo.step_batch, tables),
-                             lib.step_batch, log, t0)
+    ref_step: Callable[[np.ndarray], Any] = functools.partial(topo.step_batch, tables)
+    if number_format(model.controller.number_format).quantised:
+        ref_step = functools.partial(counting_saturations, ref_step)
+    result = compare_batches(model.controller.strategy, parts, ref_step, lib.step_batch, log, t0)
+    if result.saturations:
+        passing = result.states - result.faulted_states
+        for site, k in result.saturations.items():
+            log(f"  {result.strategy:12s} saturates {site}: {k} of {passing} states passing the guard")
     return named_c(result, model, tables)
+
+
+def counting_saturations(ref_step: Callable[[np.ndarray], np.ndarray],
+                         x: np.ndarray) -> tuple[np.ndarray, dict[str, int]]:
+    """``ref_step(x)`` and, per saturating operation, the states of ``x`` passing the input guard that
+    saturate it (module doc); picklable as a partial for the process pool."""
+    with count_saturations(len(x)) as rec:
+        out = ref_step(x)
+    return out, rec.counts(out["fault"] == 0)
 
 
 def named_c(result: StrategyResult, model: Model, tables: Any) -> StrategyResult:
@@ -223,9 +249,10 @@ def check_verify_memory(model: Model, strategies: list[str], n_states: int, clos
     return estimates
 
 
-def compare_batches(strategy: str, parts: dict[str, np.ndarray], ref_step: Callable[[np.ndarray], np.ndarray],
+def compare_batches(strategy: str, parts: dict[str, np.ndarray], ref_step: Callable[[np.ndarray], Any],
                     c_step: Callable[[np.ndarray], np.ndarray], log: Callable[[str], None], t0: float) -> StrategyResult:
     """Run both implementations over every state (in chunks of :func:`chunking`) and compare bits.
+    ``ref_step`` returns the reference outputs, or (outputs, saturation counts) (:func:`counting_saturations`).
 
     The Python reference, the slow side, runs in a process pool on every core
     (``ref_step`` must be picklable: a module function, or a partial of one);
@@ -239,13 +266,18 @@ def compare_batches(strategy: str, parts: dict[str, np.ndarray], ref_step: Calla
     per_field: dict[str, int] = {}
     first = ""
     faulted = 0
+    saturations: dict[str, int] = {}
     with contextlib.ExitStack() as stack:
         if n_jobs > 1:
             pool = stack.enter_context(ProcessPoolExecutor(n_jobs, mp_context=multiprocessing.get_context("fork")))
-            refs: Iterator[np.ndarray] = (f.result() for f in [pool.submit(ref_step, states[a:b]) for a, b in bounds])
+            refs: Iterator[Any] = (f.result() for f in [pool.submit(ref_step, states[a:b]) for a, b in bounds])
         else:
             refs = (ref_step(states[a:b]) for a, b in bounds)
         for (lo, hi), ref in zip(bounds, refs):
+            if isinstance(ref, tuple):
+                ref, sat = ref
+                for k, v in sat.items():
+                    saturations[k] = saturations.get(k, 0) + v
             x = states[lo:hi]
             got = c_step(x)
             bad, pf = mismatch_mask(ref, got)
@@ -269,4 +301,5 @@ def compare_batches(strategy: str, parts: dict[str, np.ndarray], ref_step: Calla
         first_mismatch=first,
         wall_s=wall,
         states_per_s=total / wall if wall > 0 else 0.0,
+        saturations=dict(sorted(saturations.items())),
     )
