@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 from codegen.model import SPEED_GUARD_PER_RATED, Model
 
-__all__ = ["Finding", "operating_findings", "plausibility_findings", "g4"]
+__all__ = ["Finding", "above_rated_finding", "operating_findings", "plausibility_findings", "g4"]
 
 
 @dataclass(frozen=True)
@@ -89,7 +89,10 @@ def plausibility_findings(model: Model) -> list[Finding]:
     * back-EMF at rated speed against Udc/sqrt(3): below :data:`EMF_SHARE_MIN` suggests rad/s entered as
       r/min (or a motor far too small for the DC link);
     * electrical time constant min(Ld, Lq)/Rs against the control period;
-    * the speed reference against the step's speed guard (``SPEED_GUARD_PER_RATED`` x rated).
+    * the speed reference against the step's speed guard (``SPEED_GUARD_PER_RATED`` x rated), or,
+      below the guard, against the rated speed itself when the config's profile is what runs
+      (``scenario.set = "config"``; a topology's own run set is checked by its section): the other
+      load-time checks hold up to rated speed only.
     """
     m, inv, c = model.motor, model.inverter, model.controller
     w_m = m.rated_speed_rpm * 2.0 * math.pi / 60.0
@@ -125,4 +128,20 @@ def plausibility_findings(model: Model) -> list[Finding]:
         out.append(Finding("scenario.speed_ref_rpm", top,
                            f"reaches {g4(top)} r/min, above the step's speed guard ({g4(SPEED_GUARD_PER_RATED)} x "
                            f"rated = {g4(guard_rpm)} r/min): the controller trips there", False))
+    elif model.scenario.set == "config" and top > m.rated_speed_rpm:
+        out.append(above_rated_finding(model, "scenario.speed_ref_rpm", top, top))
     return out
+
+
+def above_rated_finding(model: Model, field: str, value: object, top_rpm: float) -> Finding:
+    """The warning for a scenario that runs the motor at ``top_rpm`` r/min, above
+    ``motor.rated_speed_rpm``: the operating-point checks (back-EMF against the DC link, psi*
+    reachable) are made at rated speed, so they do not cover that run; the back-EMF at ``top_rpm``
+    is stated against Udc/sqrt(3)."""
+    m = model.motor
+    emf = top_rpm * 2.0 * math.pi / 60.0 * m.pole_pairs * m.psi_f_wb
+    v_linear = model.inverter.udc_v / math.sqrt(3.0)
+    return Finding(field, value,
+                   f"runs the motor at {g4(top_rpm)} r/min, above motor.rated_speed_rpm = {g4(m.rated_speed_rpm)} "
+                   f"r/min: the load-time voltage checks are made at rated speed and do not cover it (back-EMF at "
+                   f"{g4(top_rpm)} r/min: {g4(emf)} V; Udc/sqrt(3) = {g4(v_linear)} V)", False)

@@ -134,3 +134,60 @@ def test_unit_slips_warn_at_load_naming_the_field(field, value, fragments):
 def test_examples_have_no_plausibility_warning():
     for name in ("seed001_spmsm", "seed001_ipmsm", "servo400w", "seed000_tlevel"):
         assert load_config(SERVO_EXAMPLE.parent / f"{name}.toml").warnings == (), name
+
+
+def _warnings_on(model, field: str) -> list[str]:
+    return [w for w in model.warnings if f": {field} = " in w]
+
+
+def test_salient_motor_with_constant_flux_reference_warns():
+    """An IPMSM (Ld != Lq) with the constant psi* gets advice to use the MTPA reference; a surface
+    motor with the same constant reference (the SPMSM and servo examples) gets none."""
+    ipmsm = SERVO_EXAMPLE.parent / "seed001_ipmsm.toml"
+    mine = _warnings_on(load_config(ipmsm, {"controller.psi_ref": "constant"}), "controller.psi_ref")
+    assert len(mine) == 1, mine
+    for fragment in ("'constant'", "salient", "motor.ld_h = 0.0033 H", "motor.lq_h = 0.0073 H",
+                     'controller.psi_ref = "mtpa"'):
+        assert fragment in mine[0], (fragment, mine[0])
+    assert load_config(ipmsm).warnings == ()  # the example itself uses psi_ref = "mtpa"
+    assert load_config(SPMSM).controller.psi_ref == "constant"
+    assert load_config(SPMSM).warnings == () and load_config(SERVO_EXAMPLE).warnings == ()
+
+
+def test_salient_motor_warning_reaches_the_command_line(capsys, tmp_path):
+    ipmsm = SERVO_EXAMPLE.parent / "seed001_ipmsm.toml"
+    assert main(["generate", str(ipmsm), "--set", "controller.psi_ref=constant", "-o", str(tmp_path), "-q"]) == 0
+    err = capsys.readouterr().err
+    assert "mpcgen: warning:" in err and "controller.psi_ref = 'constant'" in err
+
+
+def test_scenario_above_rated_speed_warns_naming_the_field():
+    """A profile above motor.rated_speed_rpm (below the speed guard) is warned about on
+    scenario.speed_ref_rpm; at rated speed it is not; above the guard only the guard's warning."""
+    mine = _warnings_on(load_config(SERVO_EXAMPLE, {"scenario.speed_ref_rpm": [[0.0, 3000.0], [0.3, -3600.0]]}),
+                        "scenario.speed_ref_rpm")
+    assert len(mine) == 1, mine
+    for fragment in ("runs the motor at 3600 r/min", "above motor.rated_speed_rpm = 3000 r/min",
+                     "back-EMF at 3600 r/min: 54.29 V", "Udc/sqrt(3) = 179 V"):
+        assert fragment in mine[0], (fragment, mine[0])
+    assert load_config(SERVO_EXAMPLE, {"scenario.speed_ref_rpm": [[0.0, 3000.0]]}).warnings == ()
+    guard = _warnings_on(load_config(SERVO_EXAMPLE, {"scenario.speed_ref_rpm": [[0.0, 20000.0]]}),
+                         "scenario.speed_ref_rpm")
+    assert len(guard) == 1 and "speed guard" in guard[0]
+
+
+def test_table5_set_above_rated_speed_warns_naming_the_set():
+    """The T-type's Table 5 set runs 300/1800/3000 r/min whatever the motor: on a 2000 r/min motor
+    the warning names scenario.set; the config's own profile below rated speed gives none."""
+    tlevel = SERVO_EXAMPLE.parent / "seed000_tlevel.toml"
+    m = load_config(tlevel, {"motor.rated_speed_rpm": 2000.0})
+    assert m.scenario.set == "mpdtc-table5"
+    mine = _warnings_on(m, "scenario.set")
+    assert len(mine) == 1 and len(m.warnings) == 1, m.warnings
+    for fragment in ("'mpdtc-table5'", "Table 5 set (steady runs at 300, 1800 and 3000 r/min)",
+                     "above motor.rated_speed_rpm = 2000 r/min"):
+        assert fragment in mine[0], (fragment, mine[0])
+    own = load_config(tlevel, {"motor.rated_speed_rpm": 2000.0, "scenario.set": "config",
+                               "scenario.speed_ref_rpm": [[0.0, 1500.0]]})
+    assert own.warnings == ()
+    assert load_config(tlevel).warnings == ()  # rated 3000 r/min: the set stays within it

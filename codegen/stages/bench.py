@@ -19,6 +19,11 @@ step's executed path in the real image (traced in unicorn) through llvm-mca's Co
 model, and ``m7_cycles_bound``, the essential operations at that model's issue limits, with
 ``m7_cycles_est_over_bound``; ``m7_cycles_bound_overlap`` the same operations with every unit
 overlapping perfectly (``codegen.stages.cycles``; docs/targets.md "Cycle estimate").
+
+One state set for every M7 figure: the instruction counts and the cycle estimate (and its bounds)
+are taken over the same ``N_BENCH`` bench states (every one run in QEMU and every one traced), so
+their medians and ratios describe the same steps; ``m7_states`` in the JSON and the printed
+footnote state the count.
 """
 from __future__ import annotations
 
@@ -34,6 +39,7 @@ from codegen.errors import MpcgenError
 from codegen.model import Model
 from codegen.numfmt import CONFIG_FORMATS
 from codegen.stages.cycles import METHOD_NOTE
+from codegen.stages.fwdata import N_BENCH
 from codegen.topology import topology_of
 
 
@@ -49,8 +55,8 @@ def host_ns_per_step(libs: dict[str, Any], states: np.ndarray, repeats: int) -> 
     return best
 
 
-def emulated_instructions(model: Model, strategies: list[str], log: Callable[[str], None],
-                          cycle_states: int = 256) -> dict[str, dict[str, Any]]:
+def emulated_instructions(model: Model, strategies: list[str], log: Callable[[str], None]
+                          ) -> dict[str, dict[str, Any]]:
     """Instructions per step on the emulated Cortex-M7 (QEMU -icount) for each strategy, in every
     number format a config can choose (``codegen.numfmt.CONFIG_FORMATS``): strategy -> format name -> figures, or None
     where the config does not fit another format (its error message under ``"error"``).
@@ -62,7 +68,8 @@ def emulated_instructions(model: Model, strategies: list[str], log: Callable[[st
     each image (project, build, QEMU run, digests, trace, pipeline model) and a heartbeat
     every few seconds while one runs (``codegen.stages.progress``).  In the config's own number
     format, each strategy also gets its estimated Cortex-M7 cycles and their lower bound
-    (``codegen.stages.cycles.strategy_cycles``, under ``"cycles"``; ``cycle_states`` bench states traced).
+    (``codegen.stages.cycles.strategy_cycles``, under ``"cycles"``), traced over every one of the
+    ``N_BENCH`` bench states the instruction counts are taken over (the same set: an error otherwise).
     """
     import tempfile
 
@@ -89,11 +96,15 @@ def emulated_instructions(model: Model, strategies: list[str], log: Callable[[st
                     raise EmulationError(f"{s} ({fmt}): emulated results differ from the reference "
                                          f"({r.mismatches} mismatches)")
                 out[s][fmt] = {"min": r.instr_min, "median": r.instr_median, "max": r.instr_max,
-                               "mean": r.instr_mean, "states_checked": r.states}
+                               "mean": r.instr_mean, "states_checked": r.states, "bench_states": r.bench_states}
                 if fmt == own:
                     log(f"  {s} ({fmt}): tracing the step in unicorn, cycles from llvm-mca (Cortex-M7)")
-                    out[s][fmt]["cycles"] = strategy_cycles(variant, tables, Path(tmp) / f"{s}-{fmt}" / "build" /
-                                                            "fw.elf", max_states=cycle_states, log=log)
+                    cy = strategy_cycles(variant, tables, Path(tmp) / f"{s}-{fmt}" / "build" / "fw.elf",
+                                         n_bench=N_BENCH, max_states=N_BENCH, log=log)
+                    if cy["states"] != r.bench_states:
+                        raise EmulationError(f"{s} ({fmt}): cycles estimated over {cy['states']} states, "
+                                             f"instructions counted over {r.bench_states}: not the same set")
+                    out[s][fmt]["cycles"] = cy
     return out
 
 
@@ -150,6 +161,7 @@ def bench(model: Model, strategies: list[str], emulated: bool = False, repeats: 
             m7_ratio = st["median"] / m7[base][own]["median"]
             columns, cells = _format_columns(m7[s])
             entry.update({
+                "m7_states": st["bench_states"],
                 "m7_instructions_per_step": st["median"], "m7_instructions_min": st["min"],
                 "m7_instructions_max": st["max"], "m7_ratio_to_conventional": m7_ratio,
                 "ratio_to_conventional": m7_ratio, **columns, "m7_by_number_format": m7[s],
@@ -179,13 +191,16 @@ def bench(model: Model, strategies: list[str], emulated: bool = False, repeats: 
         rows.append(line)
     rows.append(f"closed-loop simulation ({model.name}, {base}): {result['sim_periods_per_s']:,.0f} periods/s")
     if emulated:
+        n_states = m7[base][own]["bench_states"]
+        result["m7_states"] = n_states
+        rows.append(f"M7 states: every M7 figure (instructions and est. cycles, min/median/max and ratios) is "
+                    f"taken over the same {n_states} bench states (the recorded trajectory, evenly spaced), each "
+                    "run in QEMU and traced once in unicorn.")
         rows.append("M7 figures are instruction counts on the emulated Cortex-M7 (QEMU -icount), not cycles; "
                     f"the min/median/max and ratio columns are the config's number format ({own}), the last "
                     "columns the median in every number format (JSON m7_instructions_per_step_<format>), "
                     "each image's self-test bit-exact.")
-        n_traced = m7[base][own]["cycles"]["states"]
-        rows.append(f"M7 est. cycles ({own}): {n_traced} of the bench states, evenly spaced, each traced once; "
-                    + METHOD_NOTE + " Bounds: median over the traced states (range if it varies with the "
-                    "candidates evaluated); est/bound: median estimate over median bound.")
+        rows.append(f"M7 est. cycles ({own}): " + METHOD_NOTE + " Bounds: median over the traced states (range if "
+                    "it varies with the candidates evaluated); est/bound: median estimate over median bound.")
     result["_table"] = "\n".join(rows)
     return result

@@ -419,11 +419,13 @@ def check_bound(symbol: str, est_cycles: np.ndarray, bound: np.ndarray) -> None:
                          f"{len(bound)} states: the essential operations are miscounted")
 
 
-def strategy_cycles(model: Model, tables: Any, elf_path: Path, *, n_bench: int = N_BENCH, max_states: int = 256,
-                    log: Callable[[str], None] | None = None) -> dict[str, Any]:
+def strategy_cycles(model: Model, tables: Any, elf_path: Path, *, n_bench: int = N_BENCH,
+                    max_states: int | None = None, log: Callable[[str], None] | None = None) -> dict[str, Any]:
     """Estimate and bound of one strategy's image (``model`` the strategy's variant): the bench
     states the image embeds (the topology's trajectory, ``n_bench`` evenly spaced, in the step's
-    format), at most ``max_states`` of them traced.  JSON-ready figures; ``log``: progress lines."""
+    format), every one traced (the set its instruction counts are taken over), or at most
+    ``max_states`` of them, evenly spaced.  JSON-ready figures; ``log``: progress lines."""
+    max_states = n_bench if max_states is None else max_states
     from codegen.stages.fwdata import expected_outputs, in_step_format, trajectory_states
     from codegen.topology import topology_of
 

@@ -25,14 +25,21 @@ def test_host_bench(tmp_path, capsys):
 
 
 @pytest.mark.slow
-def test_emulated_bench(tmp_path):
+def test_emulated_bench(tmp_path, capsys):
     require_tool("qemu-system-arm", "qemu-system-arm")
     require_tool("arm-none-eabi-gcc", "gcc-arm-none-eabi")
     js = tmp_path / "benchm7.json"
     assert main(["bench", str(SPMSM), "--emulated", "--json", str(js), "--repeats", "1", "-q"]) == 0
     data = json.loads(js.read_text())
+    # one state set for every M7 figure: the instructions (QEMU) and the cycle estimate (every state
+    # traced) over the same N_BENCH bench states, the count stated in the output
+    assert data["m7_states"] == N_BENCH
+    assert f"the same {N_BENCH} bench states" in capsys.readouterr().out
     for s in TWO_LEVEL:
         e = data["strategies"][s]
+        assert e["m7_states"] == e["m7_cycles_est_states"] == N_BENCH
+        # the traced paths are the steps QEMU counted: the same median instruction count
+        assert e["m7_cycles_est_path_instructions_median"] == pytest.approx(e["m7_instructions_per_step"], abs=0.5)
         assert e["m7_instructions_per_step"] > 50 and e["ratio_to_conventional"] > 0
         # the cycle estimate (traced path through the M7 pipeline model) and the lower bound beside it
         assert e["m7_cycles_est_min"] <= e["m7_cycles_est_median"] <= e["m7_cycles_est_max"]

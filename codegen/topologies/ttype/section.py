@@ -13,7 +13,7 @@ from typing import NoReturn
 
 from codegen.config import BOOL, Ref, Spec, choice_spec, closed, open_closed, real_spec
 from codegen.model import Model
-from codegen.operating import Finding
+from codegen.operating import Finding, above_rated_finding
 
 __all__ = ["strategies", "fields", "narrowed", "check", "operating_findings", "resolve"]
 
@@ -49,8 +49,21 @@ def check(values: Mapping[str, object], fail: Callable[[str, object, str], NoRet
 
 
 def operating_findings(model: Model) -> list[Finding]:
-    """No T-type operating-point check beyond the common ones (psi* comes from MTPA)."""
-    return []
+    """Beyond the common checks (psi* comes from MTPA): ``scenario.set = "mpdtc-table5"`` runs the
+    MPDTC paper's steady speeds whatever the motor; a speed above ``motor.rated_speed_rpm`` is
+    warned about, naming ``scenario.set``."""
+    if model.scenario.set != "mpdtc-table5":
+        return []
+    from codegen.topologies.ttype.scenarios import STEADY_SPEEDS_RPM
+
+    top = max(STEADY_SPEEDS_RPM)
+    if top <= model.motor.rated_speed_rpm:
+        return []
+    *low, high = (f"{v:g}" for v in STEADY_SPEEDS_RPM)
+    speeds = f"{', '.join(low)} and {high}" if low else high
+    f = above_rated_finding(model, "scenario.set", model.scenario.set, top)
+    return [Finding(f.field, f.value, f"the MPDTC paper's Table 5 set (steady runs at {speeds} r/min) {f.text}",
+                    f.error)]
 
 
 def resolve(model: Model) -> Model:

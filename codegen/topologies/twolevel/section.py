@@ -51,16 +51,26 @@ def check(values: Mapping[str, object], fail: Callable[[str, object, str], NoRet
 
 
 def operating_findings(model: Model) -> list[Finding]:
-    """The flux reference psi* must be reachable at rated speed: omega_e psi* <= 2 Udc/pi."""
+    """The flux reference psi* must be reachable at rated speed: omega_e psi* <= 2 Udc/pi (an error).
+    A salient motor (Ld != Lq) with the constant flux reference gets a warning: psi* is then the
+    MTPA flux of one torque at most and the reluctance torque goes unused (``controller.psi_ref =
+    "mtpa"`` follows T*).  A surface motor (Ld == Lq) gets none: it has no reluctance torque."""
     m, c = model.motor, model.controller
     w_e = m.rated_speed_rpm * 2.0 * math.pi / 60.0 * m.pole_pairs
     v_six_step = 2.0 * model.inverter.udc_v / math.pi
     v_flux = w_e * c.psi_ref_wb
+    out: list[Finding] = []
     if v_flux > v_six_step:
-        return [Finding("controller.psi_ref_wb", c.psi_ref_wb,
-                        f"needs omega_e psi* = {g4(v_flux)} V at rated speed, more than the inverter "
-                        f"gives (2 Udc/pi = {g4(v_six_step)} V)", True)]
-    return []
+        out.append(Finding("controller.psi_ref_wb", c.psi_ref_wb,
+                           f"needs omega_e psi* = {g4(v_flux)} V at rated speed, more than the inverter "
+                           f"gives (2 Udc/pi = {g4(v_six_step)} V)", True))
+    if c.psi_ref == "constant" and m.ld_h != m.lq_h:
+        out.append(Finding("controller.psi_ref", c.psi_ref,
+                           f"the motor is salient (motor.ld_h = {g4(m.ld_h)} H, motor.lq_h = {g4(m.lq_h)} H) and a "
+                           f"constant psi* (controller.psi_ref_wb = {g4(c.psi_ref_wb)} Wb) ignores it: it is the "
+                           "maximum-torque-per-ampere flux of one torque at most, elsewhere the same torque takes "
+                           'more current; controller.psi_ref = "mtpa" takes psi* from T* at the MTPA point', False))
+    return out
 
 
 def resolve(model: Model) -> Model:

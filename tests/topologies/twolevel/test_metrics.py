@@ -18,7 +18,7 @@ from codegen.metrics import (
     thd,
     window_mask,
 )
-from codegen.topologies.twolevel.metrics import two_level_metrics
+from codegen.topologies.twolevel.metrics import switching_f_ave_hz, two_level_metrics
 
 DT = 50e-6
 
@@ -85,6 +85,44 @@ def test_f_ave_counts_leg_changes():
     # seed eq. (9): N_switching (6 switches, each leg change = 2 switch changes) / (6 t)
     n_switching = 2 * leg_commutations(tog)
     assert f_ave_hz(tog, 1.0) == pytest.approx(n_switching / (6 * 1.0))
+
+
+def test_f_ave_leaves_out_open_inverter_periods():
+    """Gates off (the inverter open after a guard trip): the changes into and out of the open periods
+    and their time are not part of f_ave; without open periods it is eq. (9) exactly."""
+    sw = [4, 6, 0, 0, 6, 7]
+    is_open = [0, 0, 1, 1, 0, 0]
+    # 000 -> 100 (1), 100 -> 110 (1), into the open periods and out of them: not counted, 110 -> 111 (1)
+    f, n_open = switching_f_ave_hz(sw, is_open, 1.0)
+    assert (f, n_open) == (3 / (3 * 4.0), 2)
+    # the period before the window was open: the change into the first period is not counted
+    assert switching_f_ave_hz([4, 6], [0, 0], 1.0, sw_initial=0, open_initial=1) == (1 / (3 * 2.0), 0)
+    closed = [0] * len(sw)
+    assert switching_f_ave_hz(sw, closed, DT) == (f_ave_hz(sw, len(sw) * DT), 0)
+    assert math.isnan(switching_f_ave_hz([0, 0], [1, 1], DT)[0])
+
+
+def test_two_level_metrics_f_ave_excludes_gates_off_periods(stub, spmsm_model):
+    from codegen.topologies.twolevel.sim import run_closed_loop
+
+    ffi, lib = stub
+    lib.stub_twolevel_set_echo(0)
+    tr = run_closed_loop(ffi, lib, spmsm_model)
+    r = two_level_metrics(tr, spmsm_model)
+    assert not tr.inverter_open.any()
+    assert r["f_ave_hz"] == f_ave_hz(tr.applied_sw, len(tr.applied_sw) * tr.dt_s)
+    # the same run with periods 1000..2999 open, the safe state 000 held there (as after a trip)
+    is_open = np.zeros(len(tr.applied_sw), dtype=np.uint16)
+    is_open[1000:3000] = 1
+    sw = np.where(is_open == 1, 0, tr.applied_sw).astype(tr.applied_sw.dtype)
+    faulted = dataclasses.replace(tr, inverter_open=is_open, applied_sw=sw)
+    rf = two_level_metrics(faulted, spmsm_model)
+    assert switching_f_ave_hz(faulted.applied_sw, faulted.inverter_open, tr.dt_s)[1] == 2000
+    changes = leg_commutations(sw[:1000]) + leg_commutations(sw[3000:], sw_initial=int(sw[2999])) \
+        - leg_commutations(sw[3000:3001], sw_initial=int(sw[2999]))  # the change out of the open periods
+    assert rf["f_ave_hz"] == pytest.approx(changes / (3 * (len(sw) - 2000) * tr.dt_s), rel=1e-12)
+    # eq. (9) over the whole run would count the changes into and out of the safe state 000
+    assert leg_commutations(sw) > changes
 
 
 def test_cal_ave_rmse_ripple():
