@@ -78,7 +78,11 @@ class Codegen(Protocol[T]):
         ...
 
     def render(self, model: Model, tables: T, target: str) -> dict[str, str]:
-        """File name -> text of the generated C for ``target``."""
+        """File name -> text of the generated C for ``target``: the step (``<prefix>_mpc.c/.h``,
+        ``mpc_binding.h``) and, for a target that drives a power stage (:func:`codegen.pwm.modulated_targets`),
+        the modulator that turns the step's decision into timer compares (``<prefix>_modulator.c/.h``) and
+        an example interrupt routine (``<prefix>_isr_example.c``), docs/modulator.md.  Every file is in the
+        C hash (``codegen.manifest``) and in a firmware project's ``gen/``."""
         ...
 
     def report(self, model: Model, tables: T, target: str) -> str:

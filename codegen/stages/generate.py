@@ -1,7 +1,10 @@
 """``mpcgen generate``: config -> derived tables -> C for one target + reports + a manifest.
 
 Besides the step (``<prefix>_mpc.c/.h``, ``mpc_binding.h``) it writes the
-portable speed PI (``<prefix>_speed_pi.c/.h``) every target can use.
+portable speed PI (``<prefix>_speed_pi.c/.h``) every target can use and, for
+a target that drives a power stage, the topology's modulator
+(``<prefix>_modulator.c/.h``: decision -> timer compares) and an example
+interrupt routine (``<prefix>_isr_example.c``), docs/modulator.md.
 
 The report (``<prefix>_report.md``) lists what the C contains (the
 topology's :meth:`~codegen.topology.Topology.report`) and ends with the C

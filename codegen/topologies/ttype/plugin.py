@@ -23,6 +23,7 @@ from codegen.topologies.ttype import states as test_states
 from codegen.topologies.ttype import tables_text as text
 from codegen.topologies.ttype.derive import ThreeLevelTables, derive_three_level, max_groups_of
 from codegen.topologies.ttype.hostbuild import build_three_level_library
+from codegen.topologies.ttype.modulator import render_modulator
 from codegen.topologies.ttype.records import INPUT
 from codegen.topologies.ttype.records import output_record as _output_record
 from codegen.topologies.ttype.render import render_three_level
@@ -37,10 +38,16 @@ trajectory_doc = "states evenly spaced over the 27-MPDTC run at rated speed and 
 #: steady speeds whose closed-loop states join verification (the paper's Table 5: 300, 1800, 3000 r/min)
 VERIFY_SPEEDS_RPM = (300.0, 1800.0, 3000.0)
 
-render = render_three_level
 report = report_md.report_text
 step_batch = ref.step_batch
 selftest_states = fwstates.selftest_states
+
+
+def render(model: Model, tables: ThreeLevelTables, target: str) -> dict[str, str]:
+    """The step (``render``) and, for a target that drives a power stage, its modulator and example
+    interrupt routine (``modulator``: 7-segment sequence -> 12 gates on TIM1/TIM8 or ePWM1..6,
+    docs/modulator.md)."""
+    return {**render_three_level(model, tables, target), **render_modulator(model, tables, target)}
 
 
 def output_record(model: Model) -> Record:

@@ -3,7 +3,8 @@
 This module is the plugin: its constants and functions are the protocol's
 members.  Strategies conventional, s1, s2, s3; the baseline is the
 conventional controller.  Everything delegates to this package: tables
-(``switch_tables``, ``derive``), C (``render``), reference (``reference``),
+(``switch_tables``, ``derive``), C (``render``; the modulator and the
+example interrupt routine: ``modulator``), reference (``reference``),
 test states (``states``, ``fwstates``), plant (``sim``), scenarios and
 metrics (``scenarios``, ``metrics``, ``plots``), table printing
 (``tables_text``) and the trained-tables artefact (``tables_file``).
@@ -27,6 +28,7 @@ from codegen.topologies.twolevel import states as test_states
 from codegen.topologies.twolevel import tables_text as text
 from codegen.topologies.twolevel.derive import TwoLevelTables
 from codegen.topologies.twolevel.hostbuild import build_host_library
+from codegen.topologies.twolevel.modulator import render_modulator
 from codegen.topologies.twolevel.records import INPUT, OUTPUT
 from codegen.topologies.twolevel.render import render_two_level
 from codegen.topology import Log, Progress, Trajectory, record_trajectory
@@ -40,7 +42,6 @@ trajectory_doc = "states evenly spaced over the conventional controller's closed
 
 derive = switch_tables.tables_for
 needs_training = switch_tables.needs_training
-render = render_two_level
 report = report_md.report_text
 step_batch = ref.step_batch
 selftest_states = fwstates.selftest_states
@@ -49,6 +50,12 @@ selftest_states = fwstates.selftest_states
 def output_record(model: Model) -> Record:
     """The output record (the same for every two-level strategy: 7 candidate slots)."""
     return OUTPUT
+
+
+def render(model: Model, tables: TwoLevelTables, target: str) -> dict[str, str]:
+    """The step (``render``) and, for a target that drives a power stage, its modulator and example
+    interrupt routine (``modulator``: switching state -> TIM1 / ePWM1..3 compares, docs/modulator.md)."""
+    return {**render_two_level(model, tables, target), **render_modulator(model, tables, target)}
 
 
 def host_library(model: Model, tables: TwoLevelTables, with_sim: bool = False) -> HostLib:

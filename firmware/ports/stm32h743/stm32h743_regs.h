@@ -92,4 +92,59 @@
 #define USART_ISR_TXE (1u << 7)
 #define USART_ISR_TC  (1u << 6)
 
+/* ---- PWM timers, GPIO and ADC of the generated example interrupt routine
+ * (<prefix>_isr_example.c, docs/modulator.md); board.c uses none of them.
+ * Addresses: RM0433 2.3.2 memory map (APB2: TIM1 0x40010000, TIM8
+ * 0x40010400; AHB1: ADC1 0x40022000; AHB4: GPIOA 0x58020000, GPIOC
+ * 0x58020800, GPIOE 0x58021000); register offsets from RM0433's TIM1/TIM8,
+ * GPIO and ADC register maps. */
+#define TIM1_BASE  0x40010000u
+#define TIM8_BASE  0x40010400u
+#define ADC1_BASE  0x40022000u
+#define GPIOA_BASE 0x58020000u
+#define GPIOC_BASE 0x58020800u
+#define GPIOE_BASE 0x58021000u
+/* RCC_APB2ENR (RCC + 0xF0): TIM1EN bit 0, TIM8EN bit 1 */
+#define RCC_APB2ENR CM7_REG(RCC_BASE + 0xF0u)
+#define RCC_APB2ENR_TIM1EN (1u << 0)
+#define RCC_APB2ENR_TIM8EN (1u << 1)
+/* RCC_AHB4ENR (above): GPIOAEN bit 0, GPIOBEN bit 1, GPIOCEN bit 2, GPIOEEN bit 4 */
+#define RCC_AHB4ENR_GPIOAEN (1u << 0)
+#define RCC_AHB4ENR_GPIOBEN (1u << 1)
+#define RCC_AHB4ENR_GPIOCEN (1u << 2)
+#define RCC_AHB4ENR_GPIOEEN (1u << 4)
+/* GPIO registers of any port: MODER 0x00, OSPEEDR 0x08, AFRL 0x20, AFRH 0x24 */
+#define GPIO_MODER(base)   CM7_REG((base) + 0x00u)
+#define GPIO_OSPEEDR(base) CM7_REG((base) + 0x08u)
+#define GPIO_AFRL(base)    CM7_REG((base) + 0x20u)
+#define GPIO_AFRH(base)    CM7_REG((base) + 0x24u)
+/* TIM1/TIM8 (advanced-control timers) registers */
+#define TIM_CR1(base)   CM7_REG((base) + 0x00u) /* CEN bit 0, DIR bit 4 (read-only when centre-aligned), CMS 6:5, ARPE 7 */
+#define TIM_CR2(base)   CM7_REG((base) + 0x04u) /* MMS 6:4, OISx/OISxN 8.., MMS2 23:20 */
+#define TIM_SMCR(base)  CM7_REG((base) + 0x08u) /* SMS 2:0, TS 6:4, MSM 7 */
+#define TIM_SR(base)    CM7_REG((base) + 0x10u)
+#define TIM_EGR(base)   CM7_REG((base) + 0x14u) /* UG bit 0 */
+#define TIM_CCMR1(base) CM7_REG((base) + 0x18u) /* OC1PE bit 3, OC1M 6:4; OC2PE bit 11, OC2M 14:12 */
+#define TIM_CCMR2(base) CM7_REG((base) + 0x1Cu) /* OC3PE bit 3, OC3M 6:4 */
+#define TIM_CCER(base)  CM7_REG((base) + 0x20u) /* CCxE 4(x-1), CCxP +1, CCxNE +2, CCxNP +3 */
+#define TIM_CNT(base)   CM7_REG((base) + 0x24u)
+#define TIM_PSC(base)   CM7_REG((base) + 0x28u)
+#define TIM_ARR(base)   CM7_REG((base) + 0x2Cu)
+#define TIM_RCR(base)   CM7_REG((base) + 0x30u)
+#define TIM_CCR1(base)  CM7_REG((base) + 0x34u)
+#define TIM_CCR2(base)  CM7_REG((base) + 0x38u)
+#define TIM_CCR3(base)  CM7_REG((base) + 0x3Cu)
+#define TIM_BDTR(base)  CM7_REG((base) + 0x44u) /* DTG 7:0, OSSI 10, OSSR 11, AOE 14, MOE 15 */
+#define TIM_CR1_CEN  (1u << 0)
+#define TIM_CR1_DIR  (1u << 4)
+#define TIM_BDTR_AOE (1u << 14)
+#define TIM_BDTR_MOE (1u << 15)
+/* ADC1: ISR 0x00 (JEOS bit 6, cleared by writing 1), injected data JDR1..JDR4 at 0x80..0x8C */
+#define ADC_ISR(base)  CM7_REG((base) + 0x00u)
+#define ADC_JDR1(base) CM7_REG((base) + 0x80u)
+#define ADC_JDR2(base) CM7_REG((base) + 0x84u)
+#define ADC_JDR3(base) CM7_REG((base) + 0x88u)
+#define ADC_JDR4(base) CM7_REG((base) + 0x8Cu)
+#define ADC_ISR_JEOS (1u << 6)
+
 #endif /* STM32H743_REGS_H */
