@@ -1,5 +1,5 @@
-"""``mpcgen`` command line: generate, verify, simulate, tables, bench, firmware, sweep, report, evidence, and the
-commands other packages register (``hil``).
+"""``mpcgen`` command line: generate, verify, simulate, tables, bench, firmware, sweep, tune, report, evidence, and
+the commands other packages register (``hil``).
 
 Every command is a :class:`Command`: its name, one-line help, a function adding its options and the
 function that runs it.  codegen's own are :data:`COMMANDS`; another package adds one through the
@@ -123,8 +123,13 @@ def load_model(args: argparse.Namespace) -> Model:
 
 
 def _strategies(args: argparse.Namespace, model: Model) -> list[str]:
-    return cliargs.strategy_list("--strategies", getattr(args, "strategies", None), model,
-                                 topology_of(model).strategies)
+    """``--strategies`` (a comma list), else ``--strategy`` alone, else every strategy of the topology."""
+    listed = getattr(args, "strategies", None)
+    if listed is not None and getattr(args, "strategy", None) is not None:
+        raise UsageError("--strategy and --strategies: give one of them")
+    if listed is None and getattr(args, "strategy", None) is not None:
+        return [model.controller.strategy]
+    return cliargs.strategy_list("--strategies", listed, model, topology_of(model).strategies)
 
 
 def write_json(path: str | Path | None, data: dict[str, Any]) -> None:
@@ -331,6 +336,15 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     return sweep.command(args, model, progress_log(args.quiet), _strategies(args, model), outputs)
 
 
+# ---------------------------------------------------------------- tune
+def cmd_tune(args: argparse.Namespace) -> int:
+    from codegen.stages import tune
+
+    out = cliargs.output_dir("-o", args.output) if args.output else None
+    model = load_model(args)
+    return tune.command(args, model, progress_log(args.quiet), _strategies(args, model), out)
+
+
 # ---------------------------------------------------------------- the commands and their options
 def _generate_args(g: argparse.ArgumentParser) -> None:
     add_config_args(g, target=True)
@@ -399,13 +413,48 @@ def _sweep_args(w: argparse.ArgumentParser) -> None:
     w.add_argument("--spread", action="append", default=[], metavar="SECTION.FIELD=+-PCT",
                    help="Monte Carlo: uniform spread of a field in percent (repeatable), e.g. plant.rs_ohm=+-20")
     w.add_argument("--seed", type=int, default=1, help="Monte Carlo seed (default 1)")
-    w.add_argument("--scheduler", metavar="tcp://HOST:PORT",
-                   help="a running dask.distributed scheduler (default: a LocalCluster on this machine's cores)")
-    w.add_argument("--workers", type=int, default=None, help="LocalCluster workers (default: one per core)")
-    w.add_argument("--serial", action="store_true", help="run in this process, no Dask (reference for checks)")
+    _runner_args(w)
     w.add_argument("--json", help="write every run's parameters and metrics as JSON")
     w.add_argument("--csv", help="write one row per run and strategy as CSV")
     w.add_argument("--plot", help="PNG: metric against the parameter, or the Monte Carlo distribution")
+
+
+def _runner_args(w: argparse.ArgumentParser) -> None:
+    """Where the runs of ``sweep`` and ``tune`` go: a LocalCluster, a scheduler (TLS) or this process."""
+    w.add_argument("--scheduler", metavar="tcp://HOST:PORT",
+                   help="a running dask.distributed scheduler, tcp:// or tls:// (default: a LocalCluster on this "
+                        "machine's cores)")
+    w.add_argument("--workers", type=int, default=None, help="LocalCluster workers (default: one per core)")
+    w.add_argument("--serial", action="store_true", help="run in this process, no Dask (reference for checks)")
+    w.add_argument("--tls-ca-file", dest="tls_ca_file", metavar="PEM",
+                   help="TLS: the CA that signed the scheduler's and workers' certificates (with --tls-cert, "
+                        "--tls-key; for --scheduler tls://..., or a LocalCluster over TLS)")
+    w.add_argument("--tls-cert", dest="tls_cert", metavar="PEM", help="TLS: this client's certificate")
+    w.add_argument("--tls-key", dest="tls_key", metavar="PEM", help="TLS: this client's private key")
+
+
+def _tune_args(t: argparse.ArgumentParser) -> None:
+    add_config_args(t)
+    t.add_argument("--strategies", help="comma list (default: all of the topology)")
+    t.add_argument("--weight", action="append", default=[], metavar="SECTION.FIELD[=LO:HI]",
+                   help="a cost weight to tune on a log scale (repeatable), e.g. controller.lambda_psi_nm_per_wb; "
+                        "default range: the config's value / 10^1.5 .. x 10^1.5")
+    t.add_argument("--threshold", action="append", default=[], metavar="SECTION.FIELD[=LO:HI]",
+                   help="a threshold to tune on a linear scale (repeatable), e.g. controller.eps_t_nm; default "
+                        "range: 0 .. 2 x the config's value")
+    t.add_argument("--objectives", metavar="LIST",
+                   help="figures the front trades, minimised (default T_rip_RMSE_nm,psi_rip_RMSE_wb,"
+                        "THD_ia_all_bins_percent; short names T_rip, psi_rip, THD, THD_all, f_ave, Vo, i_peak, Cal)")
+    t.add_argument("--grid", type=int, default=None,
+                   help="values per field in round 0 (default 9, 5, 4, 3 for 1, 2, 3, more fields)")
+    t.add_argument("--rounds", type=int, default=2, help="refinement rounds near the front (default 2)")
+    t.add_argument("--focus", type=int, default=3,
+                   help="each round refines around the N admissible-front points nearest the ideal point (default "
+                        "3; 0: the whole admissible front)")
+    _runner_args(t)
+    t.add_argument("-o", "--output", metavar="DIR",
+                   help="write tune.md, tune.json, tune.csv and front_<a>_<b>.png there (default: the table on "
+                        "stdout)")
 
 
 def _report_args(r: argparse.ArgumentParser) -> None:
@@ -426,6 +475,8 @@ COMMANDS: tuple[Command, ...] = (
     Command("bench", "execution cost per step, all strategies side by side", _bench_args, cmd_bench),
     Command("firmware", "write a buildable firmware project for a board", _firmware_args, cmd_firmware),
     Command("sweep", "parameter grids and Monte Carlo mismatch studies of simulate, on Dask", _sweep_args, cmd_sweep),
+    Command("tune", "cost weights and thresholds from the closed loop: the front, a recommended value, on Dask",
+            _tune_args, cmd_tune),
     Command("report", "quantisation report of the fixed-point controller (formats, errors, agreement with "
                       "float32, closed loop)", _report_args, cmd_report),
     # defined at the end of this module: looked up when called

@@ -23,6 +23,22 @@ et al., Control Theory & Applications 40(10), 2023, eq. (7)-(10)):
   the nominal one (the speed reference over the window, p * |n*| / 60,
   ``THD_ia_nominal_percent``, what a bench analyser locked to the commanded
   frequency reports).  Both state their window and harmonic range.
+* THD of i_a over all bins (``THD_ia_all_bins_percent``, :func:`thd_all_bins`):
+  the same FFT window and measured fundamental, ``sqrt(sum_{k != k1} A_k^2) /
+  A_1`` over every bin k = 1 .. f_lim / df (df = 1 / window length; k1 the
+  fundamental's bin): integer harmonics, interharmonics and subharmonics up to
+  min(10 kHz, fs/2).  ``THD_ia_interharmonic_percent`` is the part of it off the
+  integer harmonics.  A run whose decisions repeat with a period of several
+  fundamental periods puts lines between the harmonics, which the integer
+  THD does not see.
+* Drive figures (:func:`drive_figures`, reported with the tracking verdict):
+  peak phase current over the run and over the steady windows against the
+  rated current ``T_rated / (1.5 p psi_f)``, the smallest |psi_s| over the
+  steady windows against its mean there, the locked-cycle flag (the decision
+  sequence over the THD window repeats exactly, :func:`cycle_period`) and
+  ``anomalies``: one line per misbehaviour (peak current above
+  :data:`ANOMALY_PEAK_PER_RATED` x rated, or |psi_s| below
+  :data:`ANOMALY_FLUX_SHARE` x its mean, in a steady window).
 
 Te and |psi_s| are the plant's (float64) values at the sample instants; T*
 is the torque reference given to the controller; psi* = controller.psi_ref_wb, or the MTPA flux
@@ -71,6 +87,15 @@ __all__ = [
     "WINDOW_GROUPS",
     "metric_flags",
     "fault_counts",
+    "thd_all_bins",
+    "thd_ia_all_bins",
+    "cycle_period",
+    "rated_current_a",
+    "drive_figures",
+    "ANOMALY_PEAK_PER_RATED",
+    "ANOMALY_FLUX_SHARE",
+    "LOCK_MIN_REPEATS",
+    "THD_F_MAX_HZ",
 ]
 
 # Tolerance, in samples / periods, for mapping times onto the sample grid.
@@ -356,6 +381,46 @@ def thd(
     return value, info
 
 
+def thd_all_bins(
+    signal: Any, dt_s: float, t0: float, t1: float, f1_hz: float, f_max_hz: float = 10e3
+) -> tuple[float, dict[str, Any]]:
+    """Distortion over every FFT bin in percent: 100*sqrt(sum_{k != k1} A_k^2)/A_1, k = 1 .. k_max.
+
+    The window and fundamental of :func:`thd` (:func:`amplitude_spectrum`: an
+    integer number n of fundamental periods, so the fundamental is bin k1 = n
+    and the bins are df = f1/n apart); k_max*df <= min(f_max_hz, fs/2).  Every
+    bin but DC and the fundamental enters: integer harmonics (k a multiple of
+    n), interharmonics and subharmonics.  The info dict gives the window, the
+    bin range and spacing and ``interharmonic_percent``: the same sum over the
+    bins that are not integer harmonics (so all^2 = harmonics^2 + inter^2).
+    """
+    freqs, amp, info = amplitude_spectrum(signal, dt_s, t0, t1, f1_hz)
+    n_per = info["n_periods"]
+    df = info["f1_used_hz"] / n_per
+    f_lim = min(f_max_hz, 0.5 / dt_s)
+    k_max = min(int(math.floor(f_lim / df + GRID_TOL)), amp.shape[0] - 1)
+    if k_max <= n_per:
+        raise ValueError(f"no bin above the fundamental {info['f1_used_hz']:.4g} Hz lies below "
+                         f"min(f_max, fs/2) = {f_lim:.4g} Hz")
+    k = np.arange(1, k_max + 1)
+    a2 = amp[1:k_max + 1] ** 2
+    i1 = float(amp[n_per])
+    off = k != n_per
+    inter = (k % n_per) != 0
+    value = 100.0 * float(np.sqrt(np.sum(a2[off]))) / i1 if i1 > 0 else math.nan
+    info.update({
+        "bins": [1, k_max],
+        "bin_hz": df,
+        "f_max_hz": k_max * df,
+        "f_limit_hz": f_lim,
+        "i1_peak": i1,
+        "interharmonic_percent": 100.0 * float(np.sqrt(np.sum(a2[inter]))) / i1 if i1 > 0 else math.nan,
+        "definition": "100 * sqrt(sum of A_k^2 over every bin 1..k_max but the fundamental's) / A_1: integer "
+                      "harmonics, interharmonics and subharmonics",
+    })
+    return value, info
+
+
 # ---------------------------------------------------------------------------
 # switching frequency and computation: seed eq. (9)-(10)
 # ---------------------------------------------------------------------------
@@ -479,14 +544,16 @@ def _all_steady(trace: Any, model: Model, windows: list[tuple[float, float]]) ->
 
 def _thd_ia_over(trace: Any, model: Model, tw: tuple[float, float] | None, f_max_hz: float,
                  f1_hz: Callable[[float, float], float], describe: Callable[[dict[str, Any], float], str],
-                 fundamental: str) -> tuple[float, dict[str, Any]]:
+                 fundamental: str, measure: Callable[..., tuple[float, dict[str, Any]]] = thd,
+                 ) -> tuple[float, dict[str, Any]]:
     """THD of i_a over the THD window ``tw`` with the fundamental ``f1_hz(t0, t1)`` (NaN and the reason
-    when there is no window or no THD), described by ``describe(info, f1)``."""
+    when there is no window or no THD), described by ``describe(info, f1)``; ``measure``: :func:`thd`
+    (integer harmonics) or :func:`thd_all_bins`."""
     if tw is None:
         return not_computed("no steady window with a nonzero speed reference")
     try:
         f1 = f1_hz(*tw)
-        value, info = thd(trace.ia_a, trace.dt_s, tw[0], tw[1], f1, f_max_hz)
+        value, info = measure(trace.ia_a, trace.dt_s, tw[0], tw[1], f1, f_max_hz)
     except ValueError as exc:
         return not_computed(str(exc), window_s=list(tw))
     info["description"] = describe(info, f1)
@@ -505,6 +572,18 @@ def thd_ia(trace: Any, model: Model, tw: tuple[float, float] | None, f_max_hz: f
         lambda info, f1: (f"{where} [{w[0]:g}, {w[1]:g}) s, {info['n_periods']} fundamental periods, "
                           f"harmonics {info['harmonics'][0]}..{info['harmonics'][1]}"),
         "measured: mean electrical speed of the plant over the window")
+
+
+def thd_ia_all_bins(trace: Any, model: Model, tw: tuple[float, float] | None,
+                    f_max_hz: float) -> tuple[float, dict[str, Any]]:
+    """THD of i_a over every bin (:func:`thd_all_bins`) of the THD window ``tw``, the measured fundamental
+    (the window and fundamental of :func:`thd_ia`); NaN and the reason when there is none."""
+    return _thd_ia_over(
+        trace, model, tw, f_max_hz, lambda t0, t1: fundamental_hz(trace, model, t0, t1),
+        lambda info, f1: (f"i_a over [{info['t0_s']:g}, {info['t1_s']:g}) s, {info['n_periods']} fundamental "
+                          f"periods, every bin {info['bins'][0]}..{info['bins'][1]} of {info['bin_hz']:.6g} Hz "
+                          f"but the fundamental's (<= {info['f_max_hz']:.6g} Hz)"),
+        "measured: mean electrical speed of the plant over the window", thd_all_bins)
 
 
 def nominal_fundamental_hz(trace: Any, pole_pairs: int, t0: float, t1: float) -> float:
@@ -587,6 +666,115 @@ def fault_counts(fault: Any, fault_bits: tuple[tuple[str, int, str], ...]) -> di
 
 
 # ---------------------------------------------------------------------------
+# drive figures: peak current, flux collapse, locked cycle, all-bin THD
+# ---------------------------------------------------------------------------
+#: a steady window whose peak phase current exceeds this many times the rated current is a current spike
+ANOMALY_PEAK_PER_RATED = 2.0
+#: a steady window whose smallest |psi_s| is below this share of its mean |psi_s| is a flux collapse
+ANOMALY_FLUX_SHARE = 0.6
+#: a decision sequence is a locked cycle when it repeats exactly at least this many times over the window
+LOCK_MIN_REPEATS = 2
+#: upper frequency of the all-bin THD (the topologies' THD default)
+THD_F_MAX_HZ = 10e3
+
+
+def rated_current_a(model: Model) -> float:
+    """The rated current the peak current is compared with: T_rated / (1.5 p psi_f) (peak phase current
+    of rated torque with i_d = 0, as the operating-point checks estimate it: codegen.operating)."""
+    m = model.motor
+    return m.rated_torque_nm / (1.5 * m.pole_pairs * m.psi_f_wb)
+
+
+def cycle_period(decisions: Any, min_repeats: int = LOCK_MIN_REPEATS) -> int | None:
+    """The smallest L such that ``decisions[k + L] == decisions[k]`` for every k of the sequence, with
+    L <= len / ``min_repeats`` (the cycle seen at least that many times); None when there is none."""
+    v = np.asarray(decisions).ravel()
+    n = v.shape[0]
+    top = n // max(min_repeats, 1)
+    if n < 2 or top < 1:
+        return None
+    for lag in (np.flatnonzero(v[1:top + 1] == v[0]) + 1).tolist():
+        if np.array_equal(v[lag:], v[:-lag]):
+            return int(lag)
+    return None
+
+
+def drive_figures(trace: Any, model: Model) -> dict[str, Any]:
+    """Figures of one run every topology shares, beyond the seed's metrics (docs/tuning.md "Figures"):
+
+    * ``i_peak_a``: the largest |i_a|, |i_b|, |i_c| of the run; ``i_peak_steady_a`` the same over the
+      steady windows (the last ``scenario.window_s`` of each constant-reference segment that passes
+      :func:`check_steady`), ``i_peak_per_rated`` that over :func:`rated_current_a`;
+    * ``psi_min_wb``: the smallest |psi_s| over the steady windows, ``psi_min_share`` that over the mean
+      |psi_s| there;
+    * ``THD_ia_all_bins_percent`` (and ``THD_ia_interharmonic_percent``): :func:`thd_ia_all_bins` over
+      the THD window (:func:`thd_window`);
+    * ``locked_cycle``: the controller's decisions (the trace's ``vector``) over the THD window (else the
+      last steady window) repeat exactly (:func:`cycle_period`), the period in ``drive_figures``;
+    * ``anomalies``: one line per misbehaviour in a steady window: peak current above
+      :data:`ANOMALY_PEAK_PER_RATED` x rated (a current spike), smallest |psi_s| below
+      :data:`ANOMALY_FLUX_SHARE` x its mean (the flux locus collapses);
+    * ``drive_figures``: how each was taken (windows, rated current, THD bins, cycle period).
+    """
+    window_s = model.scenario.window_s
+    dt, n = trace.dt_s, trace.n
+    steady = [w for w in steady_windows(model, window_s) if check_steady(trace, model, *w).steady]
+    i_abs = np.max(np.abs(np.stack([np.asarray(trace.ia_a, np.float64), np.asarray(trace.ib_a, np.float64),
+                                    np.asarray(trace.ic_a, np.float64)])), axis=0) if n else np.zeros(0)
+    psi = np.asarray(trace.psi_wb, np.float64)
+    mask = window_mask(n, dt, steady) if steady else np.zeros(n, dtype=bool)
+    i_rated = rated_current_a(model)
+    i_peak = float(np.max(i_abs)) if n else math.nan
+    i_steady = float(np.max(i_abs[mask])) if mask.any() else math.nan
+    psi_min = float(np.min(psi[mask])) if mask.any() else math.nan
+    psi_mean = float(np.mean(psi[mask])) if mask.any() else math.nan
+    share = psi_min / psi_mean if psi_mean > 0 else math.nan
+    anomalies: list[str] = []
+    if i_steady > ANOMALY_PEAK_PER_RATED * i_rated:
+        anomalies.append(f"current spike: peak phase current {i_steady:.4g} A in a steady window, "
+                         f"{i_steady / i_rated:.2f} x the rated {i_rated:.4g} A (limit {ANOMALY_PEAK_PER_RATED:g} x)")
+    if share < ANOMALY_FLUX_SHARE:
+        anomalies.append(f"flux collapse: |psi_s| down to {psi_min:.4g} Wb in a steady window, "
+                         f"{share:.2f} x its mean {psi_mean:.4g} Wb (limit {ANOMALY_FLUX_SHARE:g} x)")
+    tw = thd_window(trace, model, window_s)
+    thd_all, thd_info = thd_ia_all_bins(trace, model, tw, THD_F_MAX_HZ)
+    lock_w = tw or (steady[-1] if steady else None)
+    period = None
+    lock_info: dict[str, Any] = {"definition": f"the decisions (vector) over the window repeat exactly, at least "
+                                               f"{LOCK_MIN_REPEATS} times"}
+    if lock_w is not None:
+        sl = window_slice(dt, lock_w[0], lock_w[1], n)
+        period = cycle_period(np.asarray(trace.vector)[sl])
+        lock_info.update({"window_s": [lock_w[0], lock_w[1]], "n_samples": sl.stop - sl.start,
+                          "period_samples": period, "period_s": None if period is None else period * dt})
+        if period is not None and tw is not None and thd_info.get("f1_used_hz"):
+            lock_info["period_fundamentals"] = period * dt * float(thd_info["f1_used_hz"])
+    else:
+        lock_info["not_computed_reason"] = "no steady window"
+    return {
+        "i_peak_a": i_peak,
+        "i_peak_steady_a": i_steady,
+        "i_peak_per_rated": i_steady / i_rated,
+        "psi_min_wb": psi_min,
+        "psi_min_share": share,
+        "THD_ia_all_bins_percent": thd_all,
+        "THD_ia_interharmonic_percent": thd_info.get("interharmonic_percent", math.nan),
+        "locked_cycle": period is not None,
+        "anomalies": anomalies,
+        "drive_figures": {
+            "i_rated_a": i_rated,
+            "i_rated_definition": "T_rated / (1.5 p psi_f)",
+            "steady_windows_s": [[a, b] for a, b in steady],
+            "i_peak": "largest |i_a|, |i_b|, |i_c|: i_peak_a over the run, i_peak_steady_a over the steady windows",
+            "psi_min": "smallest |psi_s| over the steady windows; psi_min_share = that / mean |psi_s| there",
+            "THD_ia_all_bins_percent": thd_info,
+            "locked_cycle": lock_info,
+            "anomaly_limits": {"i_peak_per_rated": ANOMALY_PEAK_PER_RATED, "psi_min_share": ANOMALY_FLUX_SHARE},
+        },
+    }
+
+
+# ---------------------------------------------------------------------------
 # the simulator's own verdict on a run
 # ---------------------------------------------------------------------------
 #: the speed at the end of a constant-reference segment must be within this share of the rated speed plus
@@ -609,7 +797,9 @@ def tracking_verdict(trace: Any, model: Model) -> dict[str, Any]:
       :data:`SATURATED_SHARE_MAX` of each steady window (mechanical speed mode only);
     * guard: no period tripped the step's input guard (current, voltage, speed limits).
 
-    Returns ``{"tracking": "ok" | "failed", "tracking_reasons": [one line each]}``.
+    Returns ``{"tracking": "ok" | "failed", "tracking_reasons": [one line each]}`` and the run's
+    :func:`drive_figures` (peak current, flux minimum, all-bin THD, locked cycle, anomalies), which every
+    topology's ``simulate`` reports with the verdict; the anomalies do not change the verdict.
     """
     reasons: list[str] = []
     if model.scenario.speed_mode == "mechanical":
@@ -634,7 +824,7 @@ def tracking_verdict(trace: Any, model: Model) -> dict[str, Any]:
     if tripped:
         reasons.append(f"the input guard tripped in {tripped} of {trace.n} periods (a current, voltage or speed "
                        "limit was reached)")
-    return {"tracking": "failed" if reasons else "ok", "tracking_reasons": reasons}
+    return {"tracking": "failed" if reasons else "ok", "tracking_reasons": reasons, **drive_figures(trace, model)}
 
 
 def _rpm(w_rad_s: float) -> float:

@@ -116,6 +116,9 @@ class Controller:
     psi_ref: PsiRef = "constant"
     #: two-level cost: "rated" (torque error over T_N) or "reference" (over max(|T*|, T_floor), eq. (5))
     cost: CostForm = "rated"
+    #: two-level cost: weight of the squared normalised flux term, g = e_T^2 + lambda_psi e_psi^2
+    #: (dimensionless; 1 is the papers' cost, bit for bit: no multiplication is emitted)
+    lambda_psi: float = 1.0
 
 
 @dataclass(frozen=True)

@@ -14,7 +14,7 @@ from codegen.cli import main
 
 from conftest import ROOT, SPMSM
 
-SUBCOMMANDS = ("generate", "verify", "simulate", "tables", "bench", "firmware", "sweep", "report", "hil")
+SUBCOMMANDS = ("generate", "verify", "simulate", "tables", "bench", "firmware", "sweep", "report", "hil", "tune")
 
 
 @pytest.mark.parametrize("sub", SUBCOMMANDS)

@@ -13,7 +13,7 @@ ROOT = Path(__file__).resolve().parent.parent
 DOCS = ROOT / "docs"
 SERVO = ROOT / "examples" / "servo400w.toml"
 DOC_FILES = ("README.md", "architecture.md", "config.md", "algorithms.md", "simulation.md", "numerics.md",
-             "targets.md", "own-motor.md", "sweeps.md", "evidence.md", "modulator.md")
+             "targets.md", "own-motor.md", "sweeps.md", "evidence.md", "modulator.md", "tuning.md")
 
 
 def _sections(text: str) -> dict[str, str]:

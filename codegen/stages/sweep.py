@@ -35,6 +35,7 @@ import tomllib
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -42,7 +43,8 @@ from codegen.config import INT, REAL, all_fields, load_config, owners, parse_ove
 from codegen.errors import ConfigError, Marker, UsageError
 from codegen.model import PLANT_DEFAULTS, Model
 
-__all__ = ["Axis", "Spread", "Plan", "parse_param", "parse_spread", "build_plan", "command",
+__all__ = ["Axis", "Spread", "Plan", "parse_param", "parse_spread", "build_plan", "command", "known_field",
+           "field_value", "base_overrides", "runner_of",
            "MAX_AXIS_VALUES", "MAX_RUNS"]
 
 Log = Callable[[str], None]
@@ -98,7 +100,7 @@ class Plan:
 
 
 # ---------------------------------------------------------------- parsing
-def _known_field(option: str, name: str, text: str) -> str:
+def known_field(option: str, name: str, text: str) -> str:
     """``name`` if it is a config field, else one line naming the option and close matches."""
     if name in all_fields():
         return name
@@ -113,7 +115,7 @@ def _split(option: str, text: str, form: str) -> tuple[str, str]:
     name, value = name.strip(), value.strip()
     if not sep or not name or not value:
         raise UsageError(f"{option} {text!r}: expected {form}")
-    return _known_field(option, name, text), value
+    return known_field(option, name, text), value
 
 
 def _number_text(v: float) -> float:
@@ -289,13 +291,23 @@ def check_runs(plan: Plan, log: Log) -> None:
 
 
 # ---------------------------------------------------------------- command
+def runner_of(args: argparse.Namespace) -> Any:
+    """The checked runner of ``--serial``, ``--scheduler``, ``--workers`` and ``--tls-ca-file``,
+    ``--tls-cert``, ``--tls-key`` (:func:`codegen.stages.sweep_runner.check_runner_args`)."""
+    from codegen.stages import sweep_runner
+
+    return sweep_runner.check_runner_args(args.serial, args.scheduler, args.workers,
+                                          getattr(args, "tls_ca_file", None), getattr(args, "tls_cert", None),
+                                          getattr(args, "tls_key", None))
+
+
 def command(args: argparse.Namespace, model: Model, log: Log, strategies: list[str],
             outputs: dict[str, Path | None]) -> int:
     """``mpcgen sweep``: check everything, run the plan (Dask or serial), write JSON, CSV and the plot
     (``strategies`` and the output files ``outputs`` "json", "csv", "plot" checked by the command line)."""
     from codegen.stages import sweep_output, sweep_runner
 
-    runner = sweep_runner.check_runner_args(args.serial, args.scheduler, args.workers)
+    runner = runner_of(args)
     plan = build_plan(args.config, model, base_overrides(args), strategies, args.param, args.spread,
                       args.monte_carlo, args.seed)
     check_runs(plan, log)

@@ -24,7 +24,7 @@ from codegen.outputs import write_atomic
 from codegen.plotting import save_figure
 from codegen.results import clean_json, metric_sets, versions, write_csv_rows
 
-__all__ = ["assemble", "flat_rows", "write_json", "write_csv", "table", "plot", "PLOT_METRICS"]
+__all__ = ["assemble", "flat_rows", "write_json", "write_csv", "table", "plot", "colours", "PLOT_METRICS"]
 
 #: metrics plotted (those a run reports), with their axis labels and scale
 PLOT_METRICS = (
@@ -179,7 +179,7 @@ def _plot_grid(axes: Any, metrics: Any, rows: list[dict[str, Any]], fields: list
         series.setdefault(_series_key(r, others), []).append(r)
     ticks = list(dict.fromkeys(str(r[x_field]) for r in rows))
     strategies = list(dict.fromkeys(str(r["strategy"]) for r in rows))
-    colours = _colours(len(series))
+    palette = colours(len(series))
     for ax, (key, label, scale) in zip(axes, metrics):
         for n, (name, rs) in enumerate(series.items()):
             pts = [(r[x_field] if numeric else ticks.index(str(r[x_field])), r.get(key)) for r in rs]
@@ -187,7 +187,7 @@ def _plot_grid(axes: Any, metrics: Any, rows: list[dict[str, Any]], fields: list
             style = _LINESTYLES[strategies.index(str(rs[0]["strategy"])) % len(_LINESTYLES)]
             if pts:
                 ax.plot([p[0] for p in pts], [p[1] for p in pts], marker="o", ms=3, ls=style,
-                        color=colours[n], label=name)
+                        color=palette[n], label=name)
         if not numeric:
             ax.set_xticks(range(len(ticks)), ticks)
         ax.set(xlabel=x_field, ylabel=label)
@@ -201,7 +201,7 @@ def _plot_grid(axes: Any, metrics: Any, rows: list[dict[str, Any]], fields: list
 _LINESTYLES = ("-", "--", ":", "-.")
 
 
-def _colours(n: int) -> list[Any]:
+def colours(n: int) -> list[Any]:
     """``n`` distinct colours (tab10 up to 10 series, then a continuous map)."""
     from matplotlib import colormaps
 

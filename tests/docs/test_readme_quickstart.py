@@ -27,19 +27,16 @@ EXCEPTIONS: dict[str, str] = {
                             "then generates, verifies with 10^6 states and simulates every example for several "
                             "minutes; its mpcgen commands are the kind the next block runs",
     "bash scripts/test.sh": "runs the whole test suite, this test included",
-    "mpcgen sweep    examples/seed001_ipmsm.toml --monte-carlo 100 --spread plant.rs_ohm=+-20 --spread "
-    "plant.psi_f_wb=+-10 --plot mc.png":
-        "a long run: 400 closed-loop runs of 2 s on a LocalCluster, 75-210 s on 2 cores, more than the rest of "
-        "the quick start together; tests/stages/test_sweep.py runs Monte Carlo sweeps on a LocalCluster with 6 "
-        "runs of a short scenario (the README should say it takes minutes, or ask for fewer runs, and this "
-        "entry go)",
+    "mpcgen tune     examples/seed000_tlevel.toml --weight controller.lambda_psi_nm_per_wb":
+        "a long run: about 34 closed-loop runs, each a new controller build, 200 s on a LocalCluster of 2 workers; "
+        "tests/stages/test_tune.py runs tune (Dask and --serial, bit for bit) on a short scenario",
     "dask scheduler": "a server on the machine the README calls HOST, running until stopped",
-    "dask worker tcp://HOST:8786": "joins the scheduler on HOST (a placeholder for another machine) and runs until "
+    "dask worker tls://HOST:8786": "joins the scheduler on HOST (a placeholder for another machine) and runs until "
                                    "stopped",
     "mpcgen sweep examples/seed001_ipmsm.toml --monte-carlo 100 --spread plant.rs_ohm=+-20 --scheduler "
-    "tcp://HOST:8786":
-        "needs the scheduler on HOST; tests/stages/test_sweep.py checks that sweeps on a Dask LocalCluster give "
-        "--serial's results",
+    "tls://HOST:8786":
+        "needs the scheduler on HOST; tests/stages/test_sweep_tls.py runs a sweep through a TLS LocalCluster and "
+        "tests/stages/test_sweep.py checks that Dask gives --serial's results",
 }
 
 #: lines that fail when typed as written: the line's start -> (the exit code it gives, the form run

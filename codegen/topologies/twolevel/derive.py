@@ -55,6 +55,9 @@ class TwoLevelTables(HasConsts):
     psi_ref: str = "constant"
     #: controller.cost: "rated" or "reference" (flux term weighted by (max(|T*|, T_floor)/T_N)^2)
     cost: str = "rated"
+    #: controller.lambda_psi != 1: the squared flux term is multiplied by LAMBDA_PSI (1: the papers' cost,
+    #: no multiplication)
+    flux_weighted: bool = False
     #: mtpa: psi* at |T*| = i dT (Wb, in the format), i = 0..MTPA_SEGMENTS-1, and the slope to the next node
     psi_tab: tuple[np.generic, ...] = ()
     psi_slope: tuple[np.generic, ...] = ()
@@ -93,6 +96,8 @@ def _constants(model: Model) -> list[Const]:
         Const("INV_TN", f(1 / m.rated_torque_nm), "1/(N*m)", "cost: (Te - T*)/T_N"),
         Const("EPS_T_NM", f(c.eps_t_nm), "N*m", "s1-s3: |dT| <= eps_T -> zero vector"),
     ]
+    if c.lambda_psi != 1.0:
+        out.append(Const("LAMBDA_PSI", f(c.lambda_psi), "", "cost: g = e_T^2 + lambda_psi e_psi^2"))
     if c.cost == "reference":
         out.append(Const("T_FLOOR_NM", f(T_FLOOR_OF_RATED * m.rated_torque_nm), "N*m",
                          "cost reference: T_n = max(|T*|, T_floor), flux weight (T_n/T_N)^2"))
@@ -166,7 +171,7 @@ def _flux_term_bound(model: Model, psi_max: float) -> float:
 def cost_bounds(model: Model) -> list[Signal]:
     """Worst cases of the cost and its terms (fixed-point ranges): |e_T| <= (Te_max + T*_guard)/T_N,
     |e_psi| <= max w (psi_max + psi*)/psi* (``_flux_term_bound``; w = 1 rated, T_n/T_N reference),
-    g <= e_T^2 + e_psi^2 (dimensionless); the reference cost's w <= T*_guard/T_N; the MTPA table's
+    g <= e_T^2 + lambda_psi e_psi^2 (dimensionless); the reference cost's w <= T*_guard/T_N; the MTPA table's
     psi* <= its largest node, 1/psi* <= 1/its smallest, position x = |T*|/dT <= segments."""
     m, c = model.motor, model.controller
     _, sigs = motor_ranges(model)
@@ -175,9 +180,12 @@ def cost_bounds(model: Model) -> list[Signal]:
     e_t = (te_max + t_guard) / m.rated_torque_nm
     e_p = _flux_term_bound(model, psi_max)
     field = "controller.psi_ref" if c.psi_ref == "mtpa" else "controller.psi_ref_wb"
+    lam = c.lambda_psi
     out = [Signal("e_T (cost torque term)", "", e_t, "motor.rated_torque_nm"),
            Signal("e_psi (cost flux term)", "", e_p, field),
-           Signal("g (cost)", "", e_t * e_t + e_p * e_p, "motor.rated_torque_nm")]
+           Signal("g (cost)", "", e_t * e_t + lam * e_p * e_p, "motor.rated_torque_nm")]
+    if lam != 1.0:
+        out.append(Signal("lambda_psi e_psi^2 (weighted cost flux term)", "", lam * e_p * e_p, "controller.lambda_psi"))
     if c.cost == "reference":
         out.append(Signal("w = T_n/T_N (cost flux weight)", "", t_guard / m.rated_torque_nm, "controller.cost"))
     if c.psi_ref == "mtpa":
@@ -242,6 +250,7 @@ def derive_two_level(model: Model, switch_table: SwitchTable | None = None) -> T
         fault_action=model.controller.fault_action,
         psi_ref=c.psi_ref,
         cost=c.cost,
+        flux_weighted=c.lambda_psi != 1.0,
         psi_tab=psi_tab,
         psi_slope=psi_slope,
     )

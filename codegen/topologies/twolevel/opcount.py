@@ -39,7 +39,8 @@ def essential_ops(tables: Any) -> dict[str, dict[str, int]]:
         if tables.n_sectors > 1:
             fp += 2  # 12-sector test: x tan30, x tan60
             cmp += 4 + (1 if tables.n_conditions == 2 else 2)  # half plane, sign of x, two angles; condition signs
-    cost_fp = 7 + (1 if tables.cost != "rated" else 0)  # cost (+ the reference cost's weight); then a compare
+    # cost (+ the reference cost's weight, + lambda_psi); then a compare
+    cost_fp = 7 + (1 if tables.cost != "rated" else 0) + (1 if tables.flux_weighted else 0)
     if geo:
         per_cand_fp = 4 + 4 + 3 + cost_fp  # flux predictor, torque, |psi|^2
     else:

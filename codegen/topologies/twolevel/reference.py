@@ -160,7 +160,8 @@ def _step(t: TwoLevelTables, x: np.ndarray) -> np.ndarray:
         active = j < row_n
         v = rows[row, j]
         te1, m1 = predict(v)
-        # g = ((Te+ - T*)/T_N)^2 + (w (|psi+| - psi*)/psi*)^2, w = 1 (rated) or T_n/T_N (reference)
+        # g = ((Te+ - T*)/T_N)^2 + lambda_psi (w (|psi+| - psi*)/psi*)^2, w = 1 (rated) or T_n/T_N
+        # (reference); lambda_psi = 1: no multiplication
         e_t = o.sub(te1, tref)
         e_t = o.mul(e_t, k.INV_TN)
         g = o.mul(e_t, e_t)
@@ -169,6 +170,8 @@ def _step(t: TwoLevelTables, x: np.ndarray) -> np.ndarray:
         if wn is not None:
             e_p = o.mul(e_p, wn)
         e_p = o.mul(e_p, e_p)
+        if t.flux_weighted:
+            e_p = o.mul(e_p, k.LAMBDA_PSI)
         g = o.add(g, e_p)
         take = active & ((j == 0) | o.rank_lt(g, best))
         best = o.where(take, g, best)

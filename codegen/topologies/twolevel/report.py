@@ -59,7 +59,8 @@ def _flux_reference_text(model: Model, t: TwoLevelTables) -> str:
 
 def _cost_text(t: TwoLevelTables) -> str:
     """The cost assumption line (eq. (C1) or (C2))."""
+    lam = " lambda_psi" if t.flux_weighted else ""
     if t.cost == "rated":
-        return "cost (C1): g = ((Te - T*)/T_N)^2 + ((|psi| - psi*)/psi*)^2."
-    return ("cost (C2): g = ((Te - T*)/T_N)^2 + (w (|psi| - psi*)/psi*)^2, w = max(|T*|, T_floor)/T_N,\n"
+        return f"cost (C1): g = ((Te - T*)/T_N)^2 +{lam} ((|psi| - psi*)/psi*)^2."
+    return (f"cost (C2): g = ((Te - T*)/T_N)^2 +{lam} (w (|psi| - psi*)/psi*)^2, w = max(|T*|, T_floor)/T_N,\n"
             f"  T_floor = {T_FLOOR_OF_RATED:g} T_N: w^2 times seed eq. (5) (squared) with T* -> max(|T*|, T_floor).")
