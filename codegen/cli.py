@@ -22,15 +22,15 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from importlib.metadata import entry_points
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from codegen import __version__, cliargs
 from codegen.errors import ConfigError, MpcgenError, UsageError
 from codegen.model import TARGETS, Model
 from codegen.outputs import write_atomic
-from codegen.results import write_csv_rows
-from codegen.stages.training import with_trained_tables
-from codegen.topology import topology_of
+
+if TYPE_CHECKING:  # the heavy modules (numpy, the compilers' glue) load when a command runs, not at start-up
+    from codegen.topology import Topology
 
 __all__ = ["Command", "COMMANDS", "ENTRY_POINT_GROUP", "EXIT_OK", "EXIT_FAIL", "EXIT_BAD_INPUT", "add_config_args",
            "load_model", "progress_log", "write_json", "registered_commands", "build_parser", "run", "main"]
@@ -54,6 +54,28 @@ class Command:
     arguments: Callable[[argparse.ArgumentParser], None]
     #: runs the command on the parsed arguments; returns the exit code
     run: Callable[[argparse.Namespace], int]
+
+
+def topology_of(model: Model) -> Topology[Any]:
+    """The model's topology plugin (imported when a command needs it: ``mpcgen --version`` and ``--help``
+    stay fast)."""
+    from codegen.topology import topology_of as of
+
+    return of(model)
+
+
+def with_trained_tables(model: Model, strategies: Sequence[str], log: Log) -> Model:
+    """``codegen.stages.training.with_trained_tables``, imported when a command needs it."""
+    from codegen.stages.training import with_trained_tables as trained
+
+    return trained(model, strategies, log)
+
+
+def write_csv_rows(path: Path, rows: list[dict[str, object]]) -> None:
+    """``codegen.results.write_csv_rows``, imported when a command needs it."""
+    from codegen.results import write_csv_rows as write
+
+    write(path, rows)
 
 
 def _err(msg: str) -> None:
@@ -545,7 +567,11 @@ def run(parser: argparse.ArgumentParser, argv: Sequence[str] | None = None) -> i
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """``mpcgen`` (the console script): codegen's commands and the registered ones."""
+    """``mpcgen`` (the console script): codegen's commands and the registered ones.  ``mpcgen --version``
+    answers before the commands (and their entry points) are collected."""
+    if list(sys.argv[1:] if argv is None else argv) == ["--version"]:
+        print(f"mpcgen {__version__}")
+        return EXIT_OK
     return run(build_parser(), argv)
 
 

@@ -166,3 +166,17 @@ def test_a_count_that_is_not_whole_is_refused(text):
 
     with pytest.raises(argparse.ArgumentTypeError):
         count(text)
+
+
+def test_start_up_imports_no_numpy_or_templates():
+    """``mpcgen --version`` (and the import of the console script) loads neither numpy nor jinja2 nor a
+    topology: the heavy modules load when a command runs (issue 30: start-up under 0.1 s)."""
+    import subprocess
+    import sys
+
+    code = ("import sys; from codegen.cli import main; rc = main(['--version']); "
+            "print(sorted(m for m in ('numpy', 'jinja2', 'codegen.topology', 'cffi') if m in sys.modules)); "
+            "raise SystemExit(rc)")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.splitlines() == [f"mpcgen {__import__('codegen').__version__}", "[]"], r.stdout
