@@ -291,6 +291,10 @@ def check_runs(plan: Plan, log: Log) -> None:
 
 
 # ---------------------------------------------------------------- command
+#: the default LocalCluster starts only for a plan of at least this many runs; fewer run serially
+LOCAL_CLUSTER_FROM_RUNS = 4
+
+
 def runner_of(args: argparse.Namespace) -> Any:
     """The checked runner of ``--serial``, ``--scheduler``, ``--workers`` and ``--tls-ca-file``,
     ``--tls-cert``, ``--tls-key`` (:func:`codegen.stages.sweep_runner.check_runner_args`)."""
@@ -311,6 +315,11 @@ def command(args: argparse.Namespace, model: Model, log: Log, strategies: list[s
     plan = build_plan(args.config, model, base_overrides(args), strategies, args.param, args.spread,
                       args.monte_carlo, args.seed)
     check_runs(plan, log)
+    if runner.kind == "local" and args.workers is None and len(plan.runs) < LOCAL_CLUSTER_FROM_RUNS:
+        # a LocalCluster takes seconds to start: a small plan runs here (the same results, bit for bit)
+        runner = sweep_runner.Runner("serial")
+        log(f"sweep: {len(plan.runs)} run(s): serially in this process (a LocalCluster starts from "
+            f"{LOCAL_CLUSTER_FROM_RUNS} runs; --workers N starts one anyway)")
     warned = set(model.warnings)
     for m in plan.models:
         for w in m.warnings:

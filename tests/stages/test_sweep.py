@@ -137,6 +137,20 @@ def test_unreachable_scheduler_is_one_line_and_exit_2(tmp_path, capsys, monkeypa
 
 
 # ---------------------------------------------------------------- Dask == serial, outputs
+def test_small_plan_runs_serially_by_default(tmp_path, capsys):
+    """A plan of fewer runs than LOCAL_CLUSTER_FROM_RUNS starts no LocalCluster (it would take longer than
+    the runs) unless --workers asks for one; the JSON says where the runs went."""
+    from codegen.stages.sweep import LOCAL_CLUSTER_FROM_RUNS
+
+    js = tmp_path / "small.json"
+    assert main(["sweep", str(SPMSM), *SHORT, "--strategies", "s1", "--param", "controller.eps_t_nm=0.2,0.4",
+                 "--json", str(js)]) == 0
+    err = capsys.readouterr().err
+    assert LOCAL_CLUSTER_FROM_RUNS > 2
+    assert "2 run(s): serially in this process" in err and "LocalCluster started" not in err
+    assert json.loads(js.read_text())["timing"]["runner"] == "serial"
+
+
 def test_local_cluster_grid_matches_serial_bit_for_bit(tmp_path, capsys):
     args = ["sweep", str(SPMSM), *SHORT, "-q", "--strategies", "conventional,s1",
             "--param", "controller.eps_t_nm=0.2:0.8:0.3", "--param", "controller.dt_s=40e-6,50e-6"]
