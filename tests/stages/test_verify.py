@@ -107,3 +107,13 @@ def test_parallel_reference_reports_what_the_serial_one_does(monkeypatch):
         results.append((r.states, r.mismatches, r.faulted_states, r.mismatches_per_field, r.first_mismatch))
     assert results[0] == results[1]
     assert results[0][1] == 3 and results[0][4].startswith("state #0:")
+
+
+def test_fixed_point_summary_states_the_saturations(capsys):
+    """A fixed-point verify prints the saturations inside the guard (none for s1; numerics.md), float32 none."""
+    assert main(["verify", str(SPMSM), "--strategy", "s1", "--tables", "published", "--number-format", "fixed",
+                 "--states", "20000", "-q"]) == 0
+    out = capsys.readouterr().out
+    assert "saturations inside the guard (states passing it): none" in out, out
+    assert main(["verify", str(SPMSM), "--strategy", "s1", "--tables", "published", "--states", "20000", "-q"]) == 0
+    assert "saturations inside the guard" not in capsys.readouterr().out
