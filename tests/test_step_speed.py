@@ -98,27 +98,3 @@ def test_firmware_makefile_unrolls_the_step_and_keeps_fp_contract_off(tmp_path):
     mk = (tmp_path / "Makefile").read_text()
     assert re.search(r"^build/gen/%_mpc\.o: CFLAGS \+= \$\(STEP_CFLAGS\)$", mk, re.M)
     assert "STEP_CFLAGS = -funroll-loops" in mk and "-ffp-contract=off" in mk
-
-
-@pytest.mark.parametrize("fmt", ["float32", "fixed"])
-def test_63_resolves_a_row_in_one_program_case(tmp_path, fmt):
-    """63-MPDTC switches once per step, on the row's program (programs.py): one case per program,
-    no per-group dispatch; the midpoint currents are stored in the program's rotation and its
-    vectors rotated back.  Each case's statements are its groups' members, interleaved."""
-    from codegen.topologies.ttype.programs import resolve_programs
-
-    m = load_config(TTYPE, {"controller.strategy": "mpdtc63", "controller.number_format": fmt})
-    progs = resolve_programs(topology_of(m).derive(m))
-    assert main(["generate", str(TTYPE), "--strategy", "mpdtc63", "--number-format", fmt, "-o", str(tmp_path),
-                 "-q"]) == 0
-    code = re.sub(r"/\*.*?\*/", "", (tmp_path / "tlevel_mpc.c").read_text(), flags=re.S)
-    body = _step_body(code, "tlevel")
-    assert body.count("switch (") == 1 and "switch (tlevel_row_prog[row])" in body
-    resolve = body[body.index("switch (tlevel_row_prog[row])"):body.index("default:")]
-    assert len(re.findall(r"^    case \d+u: \{", resolve, re.M)) == len(progs.programs) == 57
-    assert "tlevel_io_patterns(ia1, ib1, ic1, tlevel_row_rot[row], io);" in body
-    assert "vr = tlevel_vec_rot[tlevel_row_rot[row]];" in body
-    # a program's first lines start every group's chain before any chain goes on
-    case = resolve[resolve.index("case 6u: {"):]
-    lines = [ln.strip() for ln in case.splitlines()[1:] if "=" in ln and not ln.strip().startswith(("float", "int"))]
-    assert [ln.split(" =")[0] for ln in lines[:5]] == ["q_0_0", "a_1_0", "a_2_0", "a_3_0", "q_4_0"]

@@ -250,7 +250,9 @@ def _step(t: ThreeLevelTables, x: np.ndarray, counts: dict[str, np.ndarray] | No
             if t.n_sectors != 1:
                 vo2 = o.add(vo1, o.mul(k.K_VO, q))
                 av = o.abs(vo2)
-            take = m_act & ((mi == 0) | o.lt(av, m_av))
+            # the smaller |V_o(k+2)|, compared by the costs' ranking keys (numerics.md "Ranking"; the same
+            # order as < for every value >= +0, and one definition for any input)
+            take = m_act & ((mi == 0) | o.rank_lt(av, m_av))
             m_av = o.where(take, av, m_av)
             m_v = np.where(take, v, m_v)
             m_tn = o.where(take, tn, m_tn)

@@ -11,7 +11,7 @@ from codegen.model import Model
 from codegen.render import TableRow, render_step, render_step_cdef, sincos_bound, step_context, table_fields
 from codegen.topologies.ttype import virtual as vv
 from codegen.topologies.ttype.derive import DQ, ThreeLevelTables
-from codegen.topologies.ttype.programs import resolve_programs
+from codegen.topologies.ttype.programs import FIRST_VIRTUAL_SLOT, GROUP_WIDTH, block_width, ends_alone, step_programs
 from codegen.topologies.ttype.records import (
     FAULT_BITS,
     FIRST_VIRTUAL,
@@ -23,28 +23,33 @@ from codegen.topologies.ttype.records import (
 )
 
 
-def _distinct_patterns(case: dict[str, Any]) -> dict[str, Any]:
-    """27-MPDTC's case of a group (every member basic, |V_o(k+2)| a function of its one pattern):
-    a member whose pattern an earlier member has is never strictly smaller, so it is left out of
-    the comparisons (NNN and PPP share pattern 000)."""
-    seen: set[int] = set()
-    members = []
-    for mb in case["members"]:
-        if mb["pat"][0] not in seen:
-            seen.add(mb["pat"][0])
-            members.append(mb)
-    return {**case, "members": members}
+def _programs_context(t: ThreeLevelTables, interleave: int) -> dict[str, Any]:
+    """63-MPDTC: the resolve programs as the step's table (programs.py ``step_programs``), padded to
+    the C arrays' sizes (a program's virtual members to the most any program has, its groups to the
+    longest row, a group's entries to ``GROUP_WIDTH`` by its first; padding is never read), and the
+    virtual members' loop width (``block_width``) and whether a member can remain alone at its end
+    (the loop's one-by-one tail)."""
+    sp = step_programs(t)
+    nv, mg = sp.max_virtual, t.max_groups
+    vw = block_width([len(p.virt_pat) for p in sp.programs], interleave)
+    pad = [((0, 0),) * GROUP_WIDTH] * mg
+    progs = [{"label": " ".join(p.labels), "n_virt": len(p.virt_pat), "n_members": p.n_members,
+              "virt": list(p.virt_pat) + [(0,) * 4] * (nv - len(p.virt_pat)),
+              "members": ([m + (m[0],) * (GROUP_WIDTH - len(m)) for m in p.members] + pad)[:mg]}
+             for p in sp.programs]
+    return {"programs": progs, "max_virtual": nv, "group_width": GROUP_WIDTH, "first_virtual_slot": FIRST_VIRTUAL_SLOT,
+            "virt_width": vw, "virt_alone": any(ends_alone(len(p.virt_pat), vw) for p in sp.programs) or vw == 1,
+            "row_prog": sp.row_program, "row_rot": sp.row_rotation,
+            "vec_rot": [TableRow(r, f"sigma^{m}") for m, r in enumerate(sp.vec_rot)],
+            "pat_rot": [TableRow(r, f"pi^{m}") for m, r in enumerate(sp.pat_rot)]}
 
 
-def _programs_context(t: ThreeLevelTables, cases: dict[int, dict[str, Any]]) -> dict[str, Any]:
-    """63-MPDTC: the resolve programs (programs.py), one generated case each, and their tables."""
-    progs = resolve_programs(t)
-    return {
-        "row_programs": [{"index": i, "groups": [cases[g] for g in r], "n_members": sum(t.group_n[g] for g in r),
-                          "label": " ".join(t.group_labels[g] for g in r)} for i, r in enumerate(progs.programs)],
-        "row_prog": progs.row_program, "row_rot": progs.row_rotation,
-        "vec_rot": [TableRow(r, f"sigma^{m}") for m, r in enumerate(progs.vec_rot)],
-        "pat_rot": [TableRow(r, f"pi^{m}") for m, r in enumerate(progs.pat_rot)]}
+def _row_context(t: ThreeLevelTables) -> dict[str, Any]:
+    """27-MPDTC: its one row's groups, written out in the step: each group's entries (vector,
+    pattern) in member order, a member with an earlier member's pattern left out (programs.py)."""
+    row = step_programs(t).programs[0]
+    return {"row_cases": [{"label": label, "members": m} for label, m in zip(row.labels, row.members)],
+            "row_members": row.n_members, "row_label": t.row_labels[0], "max_virtual": 0}
 
 
 def three_level_context(model: Model, t: ThreeLevelTables, target: str) -> dict[str, Any]:
@@ -58,18 +63,9 @@ def three_level_context(model: Model, t: ThreeLevelTables, target: str) -> dict[
         seq.append(TableRow(tuple(s), label))
     seq_pat = [TableRow(p, f"{r.label}: " + (" ".join(f"{x:03b}" for x in p) if vv.is_virtual(i) else f"{p[0]:03b}"))
                for i, (p, r) in enumerate(zip(t.seq_pat, seq))]
-    # each group with its members and their segment patterns, known here, so the step resolves a
-    # group without table lookups or branches on the kind: 63-MPDTC in the cases of its resolve
-    # programs, 27-MPDTC its one row's groups in row order
-    cases = {g: {"group": g, "label": t.group_labels[g],
-                 "members": [{"v": v, "virtual": vv.is_virtual(v), "pat": t.seq_pat[v]}
-                             for v in t.groups[g]]} for g in range(len(t.groups))}
-    if t.n_sectors > 1:
-        per_strategy = _programs_context(t, cases)
-    else:
-        per_strategy = {"row_cases": [_distinct_patterns(cases[g]) for g in t.row_groups[0]],
-                        "row_members": sum(t.group_n[g] for g in t.row_groups[0]),
-                        "row_label": t.row_labels[0]}
+    interleave = t.nf.template_values()["interleave"]
+    assert isinstance(interleave, int)
+    per_strategy = _programs_context(t, interleave) if t.n_sectors > 1 else _row_context(t)
     return step_context(model, target, (INPUT, output_record(mg)), FAULT_BITS, **{
         **table_fields(t), "topology_macro": "MPC_TOPOLOGY_THREE_LEVEL", "guard": GUARD, "dq": DQ,
         "first_virtual": FIRST_VIRTUAL, "seq": seq, "seq_pat": seq_pat, **per_strategy,

@@ -77,3 +77,79 @@ def test_the_rotation_moves_the_sector_of_u_star_by_four():
         rotated = [[p.vec_rot[1][x] for x in t.groups[g]] for g in groups]
         mapped += rotated == [list(t.groups[g]) for g in t.row_groups[r1]]
     assert mapped == 302
+
+
+def _entries_of_row(t, groups):
+    """The row's groups as the step's table lists them, in the row's own frame: per group its
+    members (vector, slot) in member order, slot the basic member's pattern or 8 + i for the row's
+    i-th virtual member, a member whose slot an earlier member of its group has left out."""
+    out, n_virt = [], 0
+    for g in groups:
+        entries = []
+        for x in t.groups[g]:
+            if t.is_virtual[x]:
+                slot, n_virt = pg.FIRST_VIRTUAL_SLOT + n_virt, n_virt + 1
+            else:
+                slot = t.seq_pat[x][0]
+            if slot not in [s for _, s in entries]:
+                entries.append((x, slot))
+        out.append(entries)
+    return out
+
+
+def test_every_row_is_its_program_table_entry_rotated():
+    """The step's table (step_programs): a row's program entry, its vectors mapped by vec_rot[m] and
+    its patterns by pat_rot[m], is the row's own groups, members, patterns and slots."""
+    t = tables()
+    sp = pg.step_programs(t)
+    assert [p.labels for p in sp.programs] == [tuple(t.group_labels[g] for g in prog)
+                                               for prog in pg.resolve_programs(t).programs]
+    for r, groups in enumerate(t.row_groups):
+        prog, m = sp.programs[sp.row_program[r]], sp.row_rotation[r]
+        vec, pat = sp.vec_rot[m], sp.pat_rot[m]
+        assert prog.n_members == sum(t.group_n[g] for g in groups), r
+        row_virt = [x for g in groups for x in t.groups[g] if t.is_virtual[x]]
+        assert [tuple(pat[q] for q in vp) for vp in prog.virt_pat] == [tuple(t.seq_pat[x]) for x in row_virt], r
+        want = _entries_of_row(t, groups)
+        got = [[(vec[v], s if s >= pg.FIRST_VIRTUAL_SLOT else pat[s]) for v, s in entries] for entries in prog.members]
+        assert got == want, r
+        assert all(1 <= len(e) <= pg.GROUP_WIDTH for e in prog.members)
+
+
+def test_the_table_resolves_every_row_as_the_reference_rule_does():
+    """The step's resolution through the table, in the program's frame (the midpoint currents
+    stored rotated, |V_o(k+2)| by slot, a group's later entry taken only if strictly smaller), picks
+    the member the reference's rule picks on the row itself (first member, a later one only if its
+    |V_o(k+2)| is strictly smaller), for random midpoint currents; same formula both sides."""
+    import numpy as np
+
+    t = tables()
+    sp = pg.step_programs(t)
+    rng = np.random.default_rng(27)
+    ts, k_vo, tn_min = 50e-6, 500.0, 50e-6 / 6
+
+    def basic(io, vo1, p):
+        return abs(vo1 + k_vo * (ts * io[p]))
+
+    def virtual(io, vo1, sp4):
+        a = (io[sp4[1]] + io[sp4[2]]) + io[sp4[3]]
+        d = io[sp4[0]] - io[sp4[3]]
+        tn = (-2e-3 * vo1 - ts / 3 * a) / d if d != 0 else tn_min
+        tn = min(max(tn, tn_min), ts / 3)
+        return abs(vo1 + k_vo * (ts / 3 * a + tn * d))
+
+    for _ in range(20):
+        io, vo1 = rng.normal(0, 10, 8), rng.normal(0, 5)
+        for r, groups in enumerate(t.row_groups):
+            prog, m = sp.programs[sp.row_program[r]], sp.row_rotation[r]
+            io_rot = [io[q] for q in sp.pat_rot[m]]  # io_patterns: io[p] = i_o(pat_rot[m][p])
+            av = [basic(io_rot, vo1, p) for p in range(8)] + [virtual(io_rot, vo1, vp) for vp in prog.virt_pat]
+            for entries, g in zip(prog.members, groups):
+                e = list(entries) + [entries[0]] * (pg.GROUP_WIDTH - len(entries))
+                got = sp.vec_rot[m][e[1][0] if av[e[1][1]] < av[e[0][1]] else e[0][0]]
+                best, want = None, None
+                for x in t.groups[g]:
+                    v_o = virtual(io, vo1, t.seq_pat[x]) if t.is_virtual[x] else basic(io, vo1, t.seq_pat[x][0])
+                    if best is None or v_o < best:
+                        best, want = v_o, x
+                assert got == want, (r, g)
