@@ -273,6 +273,7 @@ COMMON_SCHEMA: dict[str, Spec] = {
     "plant.noise_seed": Spec(INT, closed(0, 2**31 - 1)),
     "plant.encoder_bits": Spec(INT, closed(0, 24)),
     "plant.measurement_delay_s": real_spec(closed(0, Ref("controller.dt_s"))),
+    "plant.integrator": choice_spec(Plant.INTEGRATORS),
     "target.name": choice_spec(TARGETS),
     "target.placement": choice_spec(PLACEMENTS),
 }

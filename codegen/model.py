@@ -185,6 +185,12 @@ class Plant:
     noise_seed: int = 1
     encoder_bits: int = 0
     measurement_delay_s: float = 0.0
+    #: how the simulator integrates the plant (docs/simulation.md "Integration"): "rk4" RK4 sub-steps of
+    #: at most 1 us, "exact" the Taylor series of each constant-voltage piece summed to double rounding
+    integrator: Literal["rk4", "exact"] = "rk4"
+
+    #: the values of ``integrator``, in the simulator's order (``sim_params_t.integrator``)
+    INTEGRATORS = ("rk4", "exact")
 
     def value(self, name: str, model: Model) -> float:
         """The plant's value of the parameter ``name`` (a field of this class): the override, else the

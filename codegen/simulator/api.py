@@ -37,7 +37,8 @@ CORE_HEADERS: tuple[Path, ...] = (CSRC / "sim_real.h", CSRC / "pmsm_dq.h", CSRC 
 #: steps (host only).
 SHARED_SOURCES: tuple[Path, ...] = (CSRC / "pmsm_dq.c", CSRC / "speed_pi.c", CSRC / "sim_sensors.c",
                                     CSRC / "sim_period.c")
-SHARED_HEADERS: tuple[Path, ...] = (*CORE_HEADERS, CSRC / "sim_sensors.h", CSRC / "sim_period.h")
+#: (sim_exact.h: the exact integrator, float64, host only)
+SHARED_HEADERS: tuple[Path, ...] = (*CORE_HEADERS, CSRC / "sim_sensors.h", CSRC / "sim_period.h", CSRC / "sim_exact.h")
 
 #: File name of the generated API header (the same for every topology: sim_period.h includes it).
 API_NAME = "sim_api.h"

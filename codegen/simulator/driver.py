@@ -24,13 +24,16 @@ import numpy as np
 
 from codegen.errors import MpcgenError
 from codegen.hostbuild import HostLib
-from codegen.model import Model
+from codegen.model import Model, Plant
 from codegen.records import RecordLayout
 from codegen.simulator.api import SimApi, firmware_files
 from codegen.simulator.records import SimStruct
 
 #: Largest RK4 sub-step (docs/simulation.md "Plant": at most 1 us).
 MAX_SUBSTEP_S = 1e-6
+#: ``plant.integrator`` values, in the order of ``sim_params_t.integrator`` (csrc/sim_exact.h): RK4
+#: sub-steps, or the exact integrator (the Taylor series of each constant-voltage piece)
+INTEGRATORS: tuple[str, ...] = Plant.INTEGRATORS
 #: Periods per <topology>_sim_run call (one progress report per chunk).
 DEFAULT_CHUNK = 10_000
 
@@ -125,6 +128,7 @@ def fill_common_params(p: Any, model: Model) -> Any:
     common.noise_seed = int(pl.noise_seed)
     common.encoder_bits = int(pl.encoder_bits)
     common.measurement_delay_s = float(pl.measurement_delay_s)
+    common.integrator = INTEGRATORS.index(pl.integrator)
     return p
 
 
@@ -141,6 +145,23 @@ def trace_fields(trace: SimStruct) -> dict[str, tuple[np.dtype, int]]:
         out = {**{f.name: (s.np_type(f), f.length) for f in s.fields}, **out}
         s = s.base
     return out
+
+
+#: leg levels of the three legs, each -1, 0 or +1 (a two-level leg's lower/upper rail: -1/+1)
+Levels = tuple[int, int, int]
+
+
+@dataclasses.dataclass(frozen=True)
+class InverterPeriod:
+    """The inverter during one control period as the plant applied it, in terms every topology shares:
+    the leg levels held before the period, each segment's (duration_s, leg levels) in order (a
+    zero-length segment is not applied), ``open``: every switch off during the period, ``after_open``:
+    every switch was off during the previous one.  (:mod:`codegen.simulator.tightref` integrates it.)"""
+
+    before: Levels
+    segments: tuple[tuple[float, Levels], ...]
+    open: bool = False
+    after_open: bool = False
 
 
 class TraceBase:
@@ -162,6 +183,10 @@ class TraceBase:
     def n(self) -> int:
         """Number of periods."""
         return int(self.t_s.shape[0])
+
+    def applied_period(self, k: int) -> InverterPeriod:
+        """The inverter during [t_k, t_k+1) as the plant applied it (each topology's trace says)."""
+        raise NotImplementedError(f"{type(self).__name__} does not describe its applied periods")
 
     @property
     def duration_s(self) -> float:
@@ -353,6 +378,14 @@ class PeriodStepper(ClosedLoop):
         if self._input(self.params, self.state, float(self.speed_ref[k]), float(self.load[k]), self._in_buf) != 0:
             raise SimulationError(f"{self.where}: {self.api.errors[-1]}")
         return self._in
+
+    def live_arrays(self) -> dict[str, np.ndarray]:
+        """Views of the whole scenario's trace arrays (shape (n,) or (n, w)) and ``load_nm``, filled as the
+        periods are done (entries beyond ``k`` are zero); no copy, unlike :meth:`result`."""
+        out = {name: (self.arrays[name].reshape(self.n, w) if w > 1 else self.arrays[name])
+               for name, (_, w) in self.fields.items()}
+        out["load_nm"] = self.load
+        return out
 
     def finish(self, out: np.ndarray) -> None:
         """Apply period ``k``'s decision ``out`` (one output record) and commit the period."""

@@ -132,6 +132,7 @@ SIM_PARAMS = SimStruct("sim_params_t", "plant motor, DC link, timing, speed loop
     noise_seed           i64   1  seed of the noise generator
     encoder_bits         i32   1  encoder resolution, 2^bits counts per mechanical revolution (0: ideal angle and speed)
     measurement_delay_s  f64   1  the samples are taken this long before t_k, s (0..dt_s; 0: at t_k)
+    integrator           i32   1  plant integrator: 0 RK4 sub-steps, 1 exact (Taylor series per constant-voltage piece, sim_exact.h)
 """)))
 
 #: Encoder counts kept for the speed estimate (the difference over this many periods).

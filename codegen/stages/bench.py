@@ -6,7 +6,10 @@ Host: every strategy's compiled step runs over the same recorded trajectory
 interleaved, best of ``repeats``; reported as ns per step and the ratio to
 the first strategy (conventional / mpdtc27).  Absolute nanoseconds on a
 shared machine are noise; the ratios are the figure to compare with the
-seed's Table 11.  Also: closed-loop simulation throughput in periods/s.
+seed's Table 11.  Also: closed-loop simulation throughput in periods/s, and the simulator's plant
+integrators side by side (``plant.integrator`` "rk4" and "exact": periods/s in interleaved rounds and
+each one's largest current error against scipy's DOP853 over a short window;
+``codegen.simulator.integrators``).
 
 Emulated (``--emulated``): instructions per step on the emulated Cortex-M7
 (codegen.emulate), reported as instructions -- not cycles -- for the config's
@@ -38,6 +41,7 @@ from codegen import __version__
 from codegen.errors import MpcgenError
 from codegen.model import Model
 from codegen.numfmt import CONFIG_FORMATS
+from codegen.simulator import integrators
 from codegen.stages.cycles import METHOD_NOTE
 from codegen.stages.fwdata import N_BENCH
 from codegen.topology import topology_of
@@ -190,6 +194,8 @@ def bench(model: Model, strategies: list[str], emulated: bool = False, repeats: 
         result["strategies"][s] = entry
         rows.append(line)
     rows.append(f"closed-loop simulation ({model.name}, {base}): {result['sim_periods_per_s']:,.0f} periods/s")
+    result["simulator"] = integrators.compare(topo, model, rounds=repeats, log=log)
+    rows += integrators.summary(result["simulator"], model.name)
     if emulated:
         n_states = m7[base][own]["bench_states"]
         result["m7_states"] = n_states

@@ -1,4 +1,5 @@
-"""`mpcgen bench`: host ns/step for every strategy side by side, sim throughput; emulated M7 counts."""
+"""`mpcgen bench`: host ns/step for every strategy side by side, sim throughput (both plant integrators);
+emulated M7 counts."""
 from __future__ import annotations
 
 import json
@@ -21,7 +22,14 @@ def test_host_bench(tmp_path, capsys):
         e = data["strategies"][s]
         assert e["host_ns_per_step"] > 0 and e["ratio_to_conventional"] > 0
     assert data["strategies"]["conventional"]["ratio_to_conventional"] == 1.0
-    assert "host ns/step" in capsys.readouterr().out
+    # the plant's integrators side by side: periods/s of the scenario, current error against DOP853
+    sim = data["simulator"]
+    assert sim["periods"] == 80_000 and sim["error_periods"] == 1000 and sim["rounds"] == 2
+    assert set(sim["integrators"]) == {"rk4", "exact"}
+    for e in sim["integrators"].values():
+        assert e["periods_per_s"] > 0 and 0 <= e["max_current_error_a"] < 1e-9 and e["decisions_identical"]
+    out = capsys.readouterr().out
+    assert "host ns/step" in out and "simulator periods/s" in out and "exact" in out
 
 
 @pytest.mark.slow

@@ -8,6 +8,7 @@
 #include <stddef.h>
 
 #include "pmsm_dq.h"
+#include "sim_exact.h"
 #include "sim_sensors.h"
 #include "speed_pi.h"
 
@@ -27,7 +28,8 @@ int sim_period_plant_valid(const sim_params_t *p)
            && (p->adc_bits == 0 || pmsm_dq_finite_positive(p->adc_full_scale_a))
            && finite_nonneg(p->noise_a)
            && p->encoder_bits >= 0 && p->encoder_bits <= 30
-           && finite_nonneg(p->measurement_delay_s) && p->measurement_delay_s <= p->dt_s;
+           && finite_nonneg(p->measurement_delay_s) && p->measurement_delay_s <= p->dt_s
+           && (p->integrator == SIM_INTEGRATOR_RK4 || p->integrator == SIM_INTEGRATOR_EXACT);
 }
 
 int sim_period_params_valid(const sim_params_t *p)

@@ -84,7 +84,8 @@ int sim_period_args_valid(const sim_state_t *s, long n, const double *speed_ref_
 /* Shared parameter checks of the plant timing and non-idealities: delay_periods
  * 0..SIM_PERIOD_MAX_DELAY, 0 <= dead_time_s < dt_s, device_drop_v >= 0, gain error > -1,
  * adc_bits 0..30 with adc_full_scale_a > 0 when on, noise_a >= 0, encoder_bits 0..30,
- * 0 <= measurement_delay_s <= dt_s, all finite.  1 valid. */
+ * 0 <= measurement_delay_s <= dt_s, all finite; integrator SIM_INTEGRATOR_RK4 or _EXACT (sim_exact.h).
+ * 1 valid. */
 int sim_period_plant_valid(const sim_params_t *p);
 
 /* 1 if period k's samples come from the kept state at t_k - tau (tau > 0, k > 0). */

@@ -35,6 +35,8 @@ from codegen.records import Record, fields
 from codegen.simulator import api
 from codegen.simulator.driver import (
     MAX_SUBSTEP_S,
+    InverterPeriod,
+    Levels,
     Simulator,
     TraceBase,
     fill_common_params,
@@ -89,11 +91,39 @@ SIM = api.SimApi("ttype", PARAMS, STATE, TRACE, Path(__file__).resolve().parent 
 }, core=("ttype_rhs.h", "ttype_decision.h"), board=("ttype_onboard.c",))
 
 
+def levels_of(state: int) -> Levels:
+    """Leg levels (Sa, Sb, Sc) in {-1, 0, +1} of switching state 9*(Sa+1) + 3*(Sb+1) + (Sc+1)."""
+    return (state // 9 - 1, (state // 3) % 3 - 1, state % 3 - 1)
+
+
+#: switching state OOO (every leg at the midpoint), held before the first decisions
+OOO = 13
+
+
 class _TraceProperties(TraceBase):
     """The T-type trace's derived quantities."""
 
     udc_v: float
     vo_v: np.ndarray
+    seg_s: np.ndarray
+    seg_states: np.ndarray
+    inverter_open: np.ndarray
+
+    def _last_state(self, k: int) -> int:
+        """The state at the end of the last period before k the inverter was not open (OOO if none): its
+        last non-empty segment's."""
+        j = k - 1
+        while j >= 0 and self.inverter_open[j]:
+            j -= 1
+        if j < 0:
+            return OOO
+        return int(self.seg_states[j][np.nonzero(self.seg_s[j] > 0.0)[0][-1]])
+
+    def applied_period(self, k: int) -> InverterPeriod:
+        """Period k: its applied segments (``seg_s``, ``seg_states``) from the state the previous period ended in."""
+        segs = tuple((float(t), levels_of(int(st))) for t, st in zip(self.seg_s[k], self.seg_states[k], strict=True))
+        return InverterPeriod(levels_of(self._last_state(k)), segs, open=bool(self.inverter_open[k]),
+                              after_open=k > 0 and bool(self.inverter_open[k - 1]))
 
     @property
     def uc1_v(self) -> np.ndarray:

@@ -34,6 +34,8 @@ from codegen.records import Record, fields
 from codegen.simulator import api
 from codegen.simulator.driver import (
     MAX_SUBSTEP_S,
+    InverterPeriod,
+    Levels,
     Simulator,
     TraceBase,
     default_substeps,
@@ -70,8 +72,26 @@ SIM = api.SimApi("twolevel", PARAMS, STATE, TRACE, Path(__file__).resolve().pare
     -3: "the controller returned a switching state outside 0..7",
 }, core=("twolevel_rhs.h",), board=("twolevel_onboard.c",))
 
+def levels_of(sw: int) -> Levels:
+    """Leg levels of switching state sw = Sa*4 + Sb*2 + Sc in the shared terms (-1 lower, +1 upper rail)."""
+    return (2 * ((sw >> 2) & 1) - 1, 2 * ((sw >> 1) & 1) - 1, 2 * (sw & 1) - 1)
+
+
+class _TraceProperties(TraceBase):
+    """The two-level trace's applied periods."""
+
+    applied_sw: np.ndarray
+    inverter_open: np.ndarray
+
+    def applied_period(self, k: int) -> InverterPeriod:
+        """Period k: ``applied_sw[k]`` over the whole period, from ``applied_sw[k-1]`` (000 before the first)."""
+        before = int(self.applied_sw[k - 1]) if k > 0 else 0
+        return InverterPeriod(levels_of(before), ((self.dt_s, levels_of(int(self.applied_sw[k]))),),
+                              open=bool(self.inverter_open[k]), after_open=k > 0 and bool(self.inverter_open[k - 1]))
+
+
 if TYPE_CHECKING:  # a class for annotations; the fields come from TRACE
-    class Trace(TraceBase):
+    class Trace(_TraceProperties):
         """One closed-loop run."""
 else:
     Trace = trace_class("Trace", __name__, TRACE, """One closed-loop two-level run, one entry per control period (read-only arrays).
@@ -85,7 +105,7 @@ else:
         ``prev_sw`` input.  ``gates_off``: the step's request (every switch off, acting
         d periods later as its decision does); ``inverter_open``: 1 where the inverter
         was open during [t_k, t_k+1).  ``*_meas_*``: what the controller saw (sensors).
-        """)
+        """, base=_TraceProperties)
 
 
 def params_from_model(ffi: Any, model: Model, substep_max_s: float | None = None) -> Any:

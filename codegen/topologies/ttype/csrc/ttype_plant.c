@@ -18,6 +18,7 @@
 #include <stddef.h>
 
 #include "pmsm_dq.h"
+#include "sim_exact.h"
 #include "sim_inverter.h"
 #include "ttype_rhs.h"
 
@@ -75,13 +76,64 @@ static void setup(ttype_rhs_t *c, const ttype_sim_params_t *p, const int lv[3], 
                       m->b_nms, load_nm, m->speed_imposed);
 }
 
-/* One constant interval: RK4 (pmsm_rk4.h) on the unwrapped angle (the caller wraps). */
-static void integrate(const ttype_rhs_t *c, ttype_plant_state_t *s, double dt_s, int substeps)
+/* The exact integrator (sim_exact.h) over one interval of the right-hand side c (cos/sin kept in ang,
+ * may be NULL): the device drops, if on, held at the phase currents' signs at the start; 0, or -1 (x
+ * untouched) if a sign changed by the end (the caller integrates the interval with RK4 instead).  The
+ * angle unwrapped. */
+static int exact_levels(const ttype_rhs_t *c, double *x, double dt_s, sim_exact_angle_t *ang)
+{
+    sim_exact_t e;
+    double x0[PMSM_RK4_MAX], i0[3], cs, sn;
+    int k, leg;
+
+    e.m = c->m;
+    e.ua0 = c->ua0;
+    e.ub0 = c->ub0;
+    e.ua1 = c->ua1;
+    e.ub1 = c->ub1;
+    e.ka = c->ka;
+    e.kb = c->kb;
+    e.np = !c->zero_u;
+    sim_exact_cos_sin(ang, x[3], &cs, &sn);
+    if (c->drop_v > 0.0) {
+        double dua, dub;
+        sim_inverter_drop_ab(c->drop_v, c->n_dev, x[0], x[1], cs, sn, &dua, &dub);
+        e.ua0 += dua;
+        e.ub0 += dub;
+        sim_inverter_phase_currents(x[0], x[1], x[3], i0);
+        for (k = 0; k < 5; ++k) {
+            x0[k] = x[k];
+        }
+    }
+    sim_exact_interval(&e, x, &cs, &sn, dt_s);
+    if (c->drop_v > 0.0) {
+        double i1[3];
+        sim_inverter_phase_currents(x[0], x[1], x[3], i1);
+        for (leg = 0; leg < 3; ++leg) {
+            if (sim_inverter_sign(i1[leg]) != sim_inverter_sign(i0[leg])) {
+                for (k = 0; k < 5; ++k) {
+                    x[k] = x0[k];
+                }
+                return -1;
+            }
+        }
+    }
+    sim_exact_keep(ang, x[3], cs, sn);
+    return 0;
+}
+
+/* One constant interval: RK4 (pmsm_rk4.h) in `substeps` sub-steps, or the exact integrator
+ * (p->common.integrator, sim_exact.h; ang: its kept cos/sin, may be NULL), on the unwrapped angle (the
+ * caller wraps). */
+static void integrate(const ttype_rhs_t *c, const ttype_sim_params_t *p, ttype_plant_state_t *s,
+                      double dt_s, int substeps, sim_exact_angle_t *ang)
 {
     double x[PMSM_RK4_MAX];
     sim_period_motor_load(&s->motor, x);
     x[4] = s->vo_v;
-    ttype_rhs_interval(c, x, dt_s, substeps);
+    if (p->common.integrator != SIM_INTEGRATOR_EXACT || exact_levels(c, x, dt_s, ang) != 0) {
+        ttype_rhs_interval(c, x, dt_s, substeps);
+    }
     sim_period_motor_store(&s->motor, x);
     s->vo_v = x[4];
 }
@@ -106,9 +158,9 @@ static void integrate_open(ttype_plant_state_t *s, const ttype_sim_params_t *p, 
 }
 
 /* Integrate leg levels lv (NULL: the inverter open) over len_s in sub-steps of at most
- * substep_max_s. */
+ * substep_max_s (ang: the exact integrator's cos/sin kept between a period's pieces). */
 static void integrate_levels(ttype_plant_state_t *s, const ttype_sim_params_t *p, const int *lv,
-                             double load_nm, double len_s)
+                             double load_nm, double len_s, sim_exact_angle_t *ang)
 {
     ttype_rhs_t c;
     if (lv == NULL) {
@@ -116,28 +168,28 @@ static void integrate_levels(ttype_plant_state_t *s, const ttype_sim_params_t *p
         return;
     }
     setup(&c, p, lv, load_nm);
-    integrate(&c, s, len_s, sim_inverter_substeps(len_s, p->substep_max_s));
+    integrate(&c, p, s, len_s, sim_inverter_substeps(len_s, p->substep_max_s), ang);
 }
 
 /* The piece [t0, t0 + len) with levels lv (NULL: the inverter open), split at the snapshot offset
- * t_snap when it falls inside (*snap, *taken). */
+ * t_snap when it falls inside (*snap, *taken); ang: the exact integrator's kept cos/sin. */
 static void integrate_piece(ttype_plant_state_t *s, const ttype_sim_params_t *p, const int *lv,
                             double load_nm, double t0, double len, double t_snap,
-                            ttype_plant_state_t *snap, int *taken)
+                            ttype_plant_state_t *snap, int *taken, sim_exact_angle_t *ang)
 {
     const double a = *taken ? -1.0 : sim_period_snap_split(t0, len, t_snap);
     if (a < 0.0) {
-        integrate_levels(s, p, lv, load_nm, len);
+        integrate_levels(s, p, lv, load_nm, len, ang);
         return;
     }
     if (a > 0.0) {
-        integrate_levels(s, p, lv, load_nm, a);
+        integrate_levels(s, p, lv, load_nm, a, ang);
     }
     *snap = *s;
     snap->motor.theta_e_rad = pmsm_dq_wrap_angle(snap->motor.theta_e_rad);
     *taken = 1;
     if (len - a > 0.0) {
-        integrate_levels(s, p, lv, load_nm, len - a);
+        integrate_levels(s, p, lv, load_nm, len - a, ang);
     }
 }
 
@@ -151,7 +203,7 @@ int ttype_plant_advance(ttype_plant_state_t *s, const ttype_sim_params_t *p, int
     }
     (void)ttype_rhs_levels(state, lv);
     setup(&c, p, lv, load_nm);
-    integrate(&c, s, dt_s, substeps);
+    integrate(&c, p, s, dt_s, substeps, NULL);
     s->motor.theta_e_rad = pmsm_dq_wrap_angle(s->motor.theta_e_rad);
     return 0;
 }
@@ -184,6 +236,7 @@ int ttype_plant_advance_period_gates(ttype_plant_state_t *s, const ttype_sim_par
     const double td = p->common.dead_time_s;
     double t0 = 0.0;
     int i, taken = 0, prev[3], first = 1;
+    sim_exact_angle_t ang;
     if (!(p->substep_max_s > 0.0) || !isfinite(p->substep_max_s)
         || (from_state >= TTYPE_PLANT_N_STATES) || (t_snap_s >= 0.0 && snap == NULL)) {
         return -1;
@@ -193,6 +246,7 @@ int ttype_plant_advance_period_gates(ttype_plant_state_t *s, const ttype_sim_par
             return -1;
         }
     }
+    ang.valid = 0;
     if (ttype_plant_levels(from_state, prev) != 0) { /* no state before: no edge at the start */
         (void)ttype_plant_levels((int)states[0], prev);
     }
@@ -208,15 +262,15 @@ int ttype_plant_advance_period_gates(ttype_plant_state_t *s, const ttype_sim_par
         (void)ttype_plant_levels(st, lv);
         if (open) {
             /* gates off: every switch off over the segment's time (no dead time: nothing turns on) */
-            integrate_piece(s, p, NULL, load_nm, t0, seg_s[i], t_snap_s, snap, &taken);
+            integrate_piece(s, p, NULL, load_nm, t0, seg_s[i], t_snap_s, snap, &taken, &ang);
         } else if (first && from_open && td > 0.0) {
             /* gates on again after an open period: the switches turning on close one dead time late,
              * the legs meanwhile in their diodes (the open inverter) */
             const double dead_s = td < seg_s[i] ? td : seg_s[i];
-            integrate_piece(s, p, NULL, load_nm, t0, dead_s, t_snap_s, snap, &taken);
+            integrate_piece(s, p, NULL, load_nm, t0, dead_s, t_snap_s, snap, &taken, &ang);
             if (seg_s[i] - dead_s > 0.0) {
                 integrate_piece(s, p, lv, load_nm, t0 + dead_s, seg_s[i] - dead_s, t_snap_s, snap,
-                                &taken);
+                                &taken, &ang);
             }
         } else if (td > 0.0 && sim_inverter_edges(prev, lv)) {
             /* the dead time of this segment's edges (at most the segment) */
@@ -225,13 +279,13 @@ int ttype_plant_advance_period_gates(ttype_plant_state_t *s, const ttype_sim_par
             double i_abc[3];
             sim_inverter_phase_currents(s->motor.i_d_a, s->motor.i_q_a, s->motor.theta_e_rad, i_abc);
             sim_inverter_dead_levels(prev, lv, i_abc, dead);
-            integrate_piece(s, p, dead, load_nm, t0, dead_s, t_snap_s, snap, &taken);
+            integrate_piece(s, p, dead, load_nm, t0, dead_s, t_snap_s, snap, &taken, &ang);
             if (seg_s[i] - dead_s > 0.0) {
                 integrate_piece(s, p, lv, load_nm, t0 + dead_s, seg_s[i] - dead_s, t_snap_s, snap,
-                                &taken);
+                                &taken, &ang);
             }
         } else {
-            integrate_piece(s, p, lv, load_nm, t0, seg_s[i], t_snap_s, snap, &taken);
+            integrate_piece(s, p, lv, load_nm, t0, seg_s[i], t_snap_s, snap, &taken, &ang);
         }
         t0 += seg_s[i];
         first = 0;

@@ -47,7 +47,11 @@
  * V_o) -- the inverter voltage depends on V_o, the midpoint current on the
  * currents -- is integrated by pmsm_rk4.h (classic 4th-order Runge-Kutta) in
  * equal sub-steps h = T_seg/ceil(T_seg/substep_max_s) <= substep_max_s
- * (1 us by default).  Zero-length segments are skipped.
+ * (1 us by default).  Zero-length segments are skipped.  With
+ * p->common.integrator == SIM_INTEGRATOR_EXACT (plant.integrator = "exact")
+ * every segment is instead the Taylor series of the plant's solution summed
+ * to double rounding (sim_exact.h; RK4 sub-steps remain for a segment whose
+ * device-drop sign changes and for the open inverter).
  *
  * C99, no dynamic memory, no global state: every function is reentrant.
  */

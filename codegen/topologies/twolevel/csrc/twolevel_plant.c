@@ -16,6 +16,7 @@
 #include <math.h>
 
 #include "pmsm_dq.h"
+#include "sim_exact.h"
 #include "sim_inverter.h"
 #include "twolevel_rhs.h"
 
@@ -40,9 +41,57 @@ void twolevel_plant_voltage_ab(const sim_params_t *p, int sw, double *u_alpha_v,
     twolevel_rhs_voltage_ab(p->udc_v, lv, u_alpha_v, u_beta_v);
 }
 
-/* One interval of constant leg levels: the right-hand side of twolevel_rhs.h, RK4 (pmsm_rk4.h). */
+/* The exact integrator (sim_exact.h) over one interval of the right-hand side c, the angle wrapped at
+ * the end (cos/sin kept in ang, may be NULL): the device drops, if on, held at the phase currents'
+ * signs at the start; 0, or -1 (x untouched) if a sign changed by the end (the caller integrates the
+ * interval with RK4 instead). */
+static int exact_levels(const twolevel_rhs_t *c, double *x, double dt_s, sim_exact_angle_t *ang)
+{
+    /* devices in each leg's conducting path (one switch or diode), as twolevel_rhs */
+    static const double n_dev[3] = {1.0, 1.0, 1.0};
+    sim_exact_t e;
+    double x0[PMSM_RK4_MAX], i0[3], cs, sn;
+    int k, leg;
+
+    e.m = c->m;
+    e.ua0 = c->u_alpha;
+    e.ub0 = c->u_beta;
+    e.ua1 = e.ub1 = e.ka = e.kb = 0.0;
+    e.np = 0;
+    sim_exact_cos_sin(ang, x[3], &cs, &sn);
+    if (c->drop_v > 0.0) {
+        double dua, dub;
+        sim_inverter_drop_ab(c->drop_v, n_dev, x[0], x[1], cs, sn, &dua, &dub);
+        e.ua0 += dua;
+        e.ub0 += dub;
+        sim_inverter_phase_currents(x[0], x[1], x[3], i0);
+        for (k = 0; k < 4; ++k) {
+            x0[k] = x[k];
+        }
+    }
+    sim_exact_interval(&e, x, &cs, &sn, dt_s);
+    if (c->drop_v > 0.0) {
+        double i1[3];
+        sim_inverter_phase_currents(x[0], x[1], x[3], i1);
+        for (leg = 0; leg < 3; ++leg) {
+            if (sim_inverter_sign(i1[leg]) != sim_inverter_sign(i0[leg])) {
+                for (k = 0; k < 4; ++k) {
+                    x[k] = x0[k];
+                }
+                return -1;
+            }
+        }
+    }
+    x[3] = pmsm_dq_wrap(x[3]);
+    sim_exact_keep(ang, x[3], cs, sn);
+    return 0;
+}
+
+/* One interval of constant leg levels: the right-hand side of twolevel_rhs.h, RK4 (pmsm_rk4.h) in
+ * `substeps` sub-steps, or the exact integrator (p->integrator, sim_exact.h; ang: its kept cos/sin, may
+ * be NULL). */
 static void advance_levels(pmsm_state_t *s, const sim_params_t *p, const int lv[3],
-                           double load_nm, double dt_s, int substeps)
+                           double load_nm, double dt_s, int substeps, sim_exact_angle_t *ang)
 {
     twolevel_rhs_t c;
     double x[PMSM_RK4_MAX];
@@ -52,7 +101,9 @@ static void advance_levels(pmsm_state_t *s, const sim_params_t *p, const int lv[
                       p->b_nms, load_nm, p->speed_imposed);
 
     sim_period_motor_load(s, x);
-    twolevel_rhs_interval(&c, x, dt_s, substeps);
+    if (p->integrator != SIM_INTEGRATOR_EXACT || exact_levels(&c, x, dt_s, ang) != 0) {
+        twolevel_rhs_interval(&c, x, dt_s, substeps);
+    }
     sim_period_motor_store(s, x);
 }
 
@@ -74,14 +125,15 @@ static void advance_open(pmsm_state_t *s, const sim_params_t *p, double load_nm,
     sim_period_motor_store(s, x);
 }
 
-/* One interval with leg levels lv, or (lv NULL) with the inverter open. */
+/* One interval with leg levels lv, or (lv NULL) with the inverter open (ang: the exact integrator's
+ * kept cos/sin, may be NULL). */
 static void advance_interval(pmsm_state_t *s, const sim_params_t *p, const int *lv, double load_nm,
-                             double dt_s, int substeps)
+                             double dt_s, int substeps, sim_exact_angle_t *ang)
 {
     if (lv == NULL) {
         advance_open(s, p, load_nm, dt_s, substeps);
     } else {
-        advance_levels(s, p, lv, load_nm, dt_s, substeps);
+        advance_levels(s, p, lv, load_nm, dt_s, substeps, ang);
     }
 }
 
@@ -103,30 +155,31 @@ int twolevel_plant_advance(pmsm_state_t *s, const sim_params_t *p, int sw, doubl
         return -1;
     }
     twolevel_rhs_levels(sw, lv);
-    advance_levels(s, p, lv, load_nm, dt_s, substeps);
+    advance_levels(s, p, lv, load_nm, dt_s, substeps, NULL);
     return 0;
 }
 
 /* The piece [t0, t0 + len) of a period with levels lv (NULL: the inverter open), sub-steps of at most
  * h_max (n_full for len == dt_s), split at the snapshot offset t_snap when it falls inside (*snap,
- * *taken). */
+ * *taken); ang: the exact integrator's cos/sin kept between the period's pieces. */
 static void advance_piece(pmsm_state_t *s, const sim_params_t *p, const int *lv, double load_nm,
                           double t0, double len, int n_full, double t_snap, pmsm_state_t *snap,
-                          int *taken)
+                          int *taken, sim_exact_angle_t *ang)
 {
     const double h_max = p->dt_s / (double)n_full;
     const double a = *taken ? -1.0 : sim_period_snap_split(t0, len, t_snap);
     if (a < 0.0) {
-        advance_interval(s, p, lv, load_nm, len, len == p->dt_s ? n_full : sim_inverter_substeps(len, h_max));
+        advance_interval(s, p, lv, load_nm, len, len == p->dt_s ? n_full : sim_inverter_substeps(len, h_max),
+                         ang);
         return;
     }
     if (a > 0.0) {
-        advance_interval(s, p, lv, load_nm, a, sim_inverter_substeps(a, h_max));
+        advance_interval(s, p, lv, load_nm, a, sim_inverter_substeps(a, h_max), ang);
     }
     *snap = *s;
     *taken = 1;
     if (len - a > 0.0) {
-        advance_interval(s, p, lv, load_nm, len - a, sim_inverter_substeps(len - a, h_max));
+        advance_interval(s, p, lv, load_nm, len - a, sim_inverter_substeps(len - a, h_max), ang);
     }
 }
 
@@ -143,6 +196,7 @@ int twolevel_plant_advance_period_gates(pmsm_state_t *s, const sim_params_t *p, 
 {
     int from[3], to[3], taken = 0;
     const double td = p->dead_time_s;
+    sim_exact_angle_t ang;
 
     if (sw < 0 || sw > 7 || from_sw < 0 || from_sw > 7 || substeps < 1
         || (t_snap_s >= 0.0 && snap == NULL)) {
@@ -150,23 +204,24 @@ int twolevel_plant_advance_period_gates(pmsm_state_t *s, const sim_params_t *p, 
     }
     twolevel_rhs_levels(from_sw, from);
     twolevel_rhs_levels(sw, to);
+    ang.valid = 0;
     if (open) {
         /* gates off: every switch opens at t_k (no dead time: nothing turns on) */
-        advance_piece(s, p, NULL, load_nm, 0.0, p->dt_s, substeps, t_snap_s, snap, &taken);
+        advance_piece(s, p, NULL, load_nm, 0.0, p->dt_s, substeps, t_snap_s, snap, &taken, &ang);
     } else if (from_open && td > 0.0) {
         /* gates on again after an open period: every leg's switch turning on closes one dead time late,
          * the legs meanwhile in their diodes (the open inverter) */
-        advance_piece(s, p, NULL, load_nm, 0.0, td, substeps, t_snap_s, snap, &taken);
-        advance_piece(s, p, to, load_nm, td, p->dt_s - td, substeps, t_snap_s, snap, &taken);
+        advance_piece(s, p, NULL, load_nm, 0.0, td, substeps, t_snap_s, snap, &taken, &ang);
+        advance_piece(s, p, to, load_nm, td, p->dt_s - td, substeps, t_snap_s, snap, &taken, &ang);
     } else if (td > 0.0 && sim_inverter_edges(from, to)) {
         int dead[3];
         double i_abc[3];
         sim_inverter_phase_currents(s->i_d_a, s->i_q_a, s->theta_e_rad, i_abc);
         sim_inverter_dead_levels(from, to, i_abc, dead);
-        advance_piece(s, p, dead, load_nm, 0.0, td, substeps, t_snap_s, snap, &taken);
-        advance_piece(s, p, to, load_nm, td, p->dt_s - td, substeps, t_snap_s, snap, &taken);
+        advance_piece(s, p, dead, load_nm, 0.0, td, substeps, t_snap_s, snap, &taken, &ang);
+        advance_piece(s, p, to, load_nm, td, p->dt_s - td, substeps, t_snap_s, snap, &taken, &ang);
     } else {
-        advance_piece(s, p, to, load_nm, 0.0, p->dt_s, substeps, t_snap_s, snap, &taken);
+        advance_piece(s, p, to, load_nm, 0.0, p->dt_s, substeps, t_snap_s, snap, &taken, &ang);
     }
     if (t_snap_s >= 0.0 && !taken) {
         *snap = *s; /* the offset rounded onto the period's end */

@@ -26,7 +26,11 @@
  * ODE is integrated by pmsm_rk4.h in `substeps` equal sub-steps (choose
  * substeps so that dt/substeps <= 1 us, e.g. 50 for dt = 50 us).  The
  * convergence test (halving the sub-step changes the currents by < 1e-6 A)
- * is tests/topologies/twolevel/test_plant.py.
+ * is tests/topologies/twolevel/test_plant.py.  With p->integrator ==
+ * SIM_INTEGRATOR_EXACT (plant.integrator = "exact") every interval is
+ * instead the Taylor series of the plant's solution summed to double
+ * rounding (sim_exact.h; `substeps` then only serves the RK4 fallback of an
+ * interval whose device-drop sign changes, and the open inverter's).
  *
  * C99, no dynamic memory, no global state: every function is reentrant.
  */
