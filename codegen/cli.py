@@ -183,6 +183,7 @@ def cmd_generate(args: argparse.Namespace) -> int:
 # ---------------------------------------------------------------- verify
 def cmd_verify(args: argparse.Namespace) -> int:
     from codegen.manifest import C_HASH_DEFINITION
+    from codegen.numfmt import number_format
     from codegen.stages.verify import check_verify_memory, verify_strategy
 
     model = load_model(args)
@@ -207,7 +208,7 @@ def cmd_verify(args: argparse.Namespace) -> int:
         compiled = "" if r.compiled_c_hash == r.c_hash else \
             f"; compiled and compared: the {r.compiled_target} C, C hash {r.compiled_c_hash}"
         print(f"{'':12s} C hash {r.c_hash} (the C generated for {r.c_hash_target}{compiled})")
-        if variant.controller.number_format == "fixed":  # numerics.md "Saturation inside the guard"
+        if number_format(variant.controller.number_format).quantised:  # numerics.md "Saturation inside the guard"
             passing = r.states - r.faulted_states
             sat = "; ".join(f"{site}: {k} of {passing}" for site, k in r.saturations.items()) or "none"
             print(f"{'':12s} saturations inside the guard (states passing it): {sat}")

@@ -252,12 +252,21 @@ def test_line_voltage_steps_one_level_at_every_edge_63(case):
 
 
 def test_fixed_point_times_give_the_float_counts(tmp_path):
-    """A fixed-point step's int32 Q seconds give the same segment counts (+-1) as its float32 twin's."""
+    """The fixed-point modulator's integer conversion of int32 Q seconds gives the float32 modulator's
+    segment counts (+-2) for the same times (each fixed output's seg_s decoded exactly and rounded to
+    float32), and its counts sum to the period exactly.  (The two formats' controllers may choose
+    different T_N where a small midpoint-current difference divides: that is the step's quantisation,
+    numerics.md, not the modulator's.)"""
     fx = Case("mpdtc63", "stm32h743", tmp_path / "fx", "fixed")
     fl = Case("mpdtc63", "stm32h743", tmp_path / "fl")
-    for ofx, ofl in zip(fx.out.reshape(-1)[:1000], fl.out.reshape(-1)[:1000]):
-        if ofx["vector"] != ofl["vector"] or ofx["fault"] or ofl["fault"]:
+    sc = fx.tables.scaling
+    checked = 0
+    for ofx in fx.out.reshape(-1)[:1000]:
+        if ofx["fault"]:
             continue
-        cx, cl = fx.counts(ofx), fl.counts(ofl)
+        cx = fx.counts(ofx)
+        cl = fl.counts({"seg_s": sc.decode("s", ofx["seg_s"]).astype(np.float32)})
         assert sum(cx) == 2 * fx.a
         assert max(abs(a - b) for a, b in zip(cx, cl)) <= 2, (cx, cl)
+        checked += 1
+    assert checked > 500
