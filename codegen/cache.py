@@ -88,14 +88,21 @@ def _alive(pid: int) -> bool:
 
 def _remove_stale(root: Path) -> None:
     """Remove the temporaries of processes that no longer run (an interrupted build or write)."""
-    for entry in root.rglob("*.tmp*"):
+    try:
+        entries = list(root.rglob("*.tmp*"))
+    except OSError:  # another process removed a folder during the scan: its own clean-up, nothing to do
+        return
+    for entry in entries:
         m = _TMP_RE.search(entry.name)
         if m is None or _alive(int(m.group(1))):
             continue
-        if entry.is_dir():
-            shutil.rmtree(entry, ignore_errors=True)
-        else:
-            entry.unlink(missing_ok=True)
+        try:
+            if entry.is_dir():
+                shutil.rmtree(entry, ignore_errors=True)
+            else:
+                entry.unlink(missing_ok=True)
+        except OSError:  # gone or changed under us (concurrent runs share the cache)
+            continue
 
 
 def _digest(data: bytes) -> str:

@@ -11,7 +11,11 @@ doc, with the unit in the name).  Bound to a number format
   bytes with no padding, field order stable: the canonical serialisation
   (CRC digests, firmware test data, the serial wire);
 * ``values``: the record flattened into 32-bit values (float bits or
-  integers), as the firmware runtime reads it;
+  integers), as the firmware runtime reads it; ``value_offsets``: where each
+  value lies in the canonical bytes;
+* :meth:`RecordLayout.words`: the canonical bytes of each record as
+  little-endian 32-bit words, zero-padded to a whole word (the firmware's
+  embedded test data, decoded by the runtime with ``value_offsets``);
 * ``layout_hash``: a hash of the whole layout (names, kinds, lengths, C
   types), so two builds from different schemas can tell each other apart.
 """
@@ -194,6 +198,31 @@ class RecordLayout:
                 else:
                     out.append(Value(f.name + s, "MPC_VALUE_U16", "mpc_u16_value"))
         return tuple(out)
+
+    @cached_property
+    def value_offsets(self) -> tuple[int, ...]:
+        """Octet offset of each of :attr:`values` in the canonical layout (:attr:`packed_dtype`)."""
+        placed = self.packed_dtype.fields
+        assert placed is not None
+        out: list[int] = []
+        for f in self.fields:
+            base = placed[f.name][1]
+            size = self.np_type(f).itemsize
+            out.extend(base + j * size for j in range(f.length))
+        return tuple(out)
+
+    @property
+    def word_count(self) -> int:
+        """32-bit words of one record in the canonical layout, the last one zero-padded."""
+        return -(-self.packed_dtype.itemsize // 4)
+
+    def words(self, records: np.ndarray) -> np.ndarray:
+        """(n, :attr:`word_count`) uint32 array: each record's canonical bytes (:meth:`pack`) read as
+        little-endian 32-bit words, the last word zero-padded."""
+        octets = self.pack(records)
+        padded = np.zeros((len(records), 4 * self.word_count), np.uint8)
+        padded[:, :octets.shape[1]] = octets
+        return padded.view(np.dtype("<u4")).astype(np.uint32).reshape(len(records), self.word_count)
 
     @cached_property
     def layout_hash(self) -> str:

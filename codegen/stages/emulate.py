@@ -7,10 +7,11 @@ every image re-checks this with its CAL line: a 1024-NOP sled must take
 1024 instructions).  The UART goes to a file; QEMU runs in its own process
 group, under a timeout, and is always killed by its id.
 
-``run_and_check`` builds, runs and checks one strategy's image and returns
-its counts: states, mismatches, and the instructions per step
-(min/median/max) over the bench set, a recorded closed-loop trajectory
-(``mpcgen bench --emulated`` calls it per strategy).
+``run_and_check`` builds (or takes from the build cache, when every input of
+the build is unchanged: ``firmware.build_firmware``), runs and checks one
+strategy's image and returns its counts: states, mismatches, and the
+instructions per step (min/median/max) over the bench set, a recorded
+closed-loop trajectory (``mpcgen bench --emulated`` calls it per strategy).
 """
 from __future__ import annotations
 
@@ -284,8 +285,9 @@ def run_and_check(model: Model, tables: Any, workdir: Path, *, n_selftest: int =
     with phase(log, f"{label}: writing the firmware project (reference outputs of {n_selftest} self-test "
                     f"and {n_bench} bench states)"):
         write_firmware_project(model, tables, board, workdir, n_selftest, n_bench=n_bench)
+    # a clean project whose every build input is unchanged gets the cached build (a "reused" line)
     with phase(log, f"{label}: compiling and linking the image (make)", probe=lambda: build_progress(workdir)):
-        build = build_firmware(workdir, board)
+        build = build_firmware(workdir, board, log=log)
     with phase(log, f"{label}: running the image in QEMU") as p:
         run = run_qemu(build.image, timeout_s=timeout_s, icount_shift=icount_shift, progress=p.note, board=board)
     if run.timed_out:

@@ -4,8 +4,8 @@
 
     Makefile                         (templates/firmware/Makefile.j2)
     gen/<prefix>_mpc.[ch], mpc_binding.h    generated controller (render.py)
-    gen/mpc_values.[ch]              record flattening (templates/firmware/values.*.j2)
-    gen/mpc_selftest_data.c          embedded states + expected outputs
+    gen/mpc_values.[ch]              record value tables, flattening and its inverse (templates/firmware/values.*.j2)
+    gen/mpc_selftest_data.c          embedded states + expected outputs: canonical records as uint32 words
     firmware/runtime/...             the shared hand-written runtime
     firmware/ports/<board>/...       the board port (+ ports/cortex-m7 for Arm)
 
@@ -14,30 +14,43 @@ renders the protocol codec: codegen never imports hil) adds the protocol's
 runtime files, its generated files and ``-DMPC_HIL``: the image then serves
 the HIL protocol instead of running the self-test.
 
+The embedded records are the canonical little-endian layout of
+``codegen.records.RecordLayout`` in 32-bit words (``RecordLayout.words``,
+printed by numpy in one pass: ``fwdata.c_words``); the runtime decodes them
+with the value tables generated from the same layout (firmware/runtime/selftest.h).
+
 ``build_firmware`` runs ``make`` there and returns the image's size and stack
-figures.  Sources come from ``codegen.resources`` so the installed package
-works outside a checkout.
+figures; a clean project whose every build input hashes as an earlier build's
+gets that build's folder from the build cache instead (``codegen.cache``
+entries under ``firmware/``).  Sources come from ``codegen.resources`` so the
+installed package works outside a checkout.
 """
 from __future__ import annotations
 
+import hashlib
+import os
 import re
 import shutil
 import subprocess
+import tarfile
+import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from codegen import __version__
+from codegen import __version__, cache
 from codegen.errors import MpcgenError
 from codegen.model import Model
-from codegen.records import REAL, RecordLayout
+from codegen.records import RecordLayout
 from codegen.render import environment, write_files
 from codegen.resources import firmware_dir
 from codegen.stages.fwdata import (
     N_BENCH,
     SELFTEST_SEED,
+    c_words,
     expected_outputs,
     in_step_format,
     layouts,
@@ -74,13 +87,13 @@ class ProtocolBuild:
 
 
 def full_record(inp: RecordLayout, out: RecordLayout) -> int:
-    """Octets of one embedded state with its full expected outputs."""
-    return inp.dtype.itemsize + out.dtype.itemsize
+    """Octets of one embedded state with its full expected outputs (canonical records in 32-bit words)."""
+    return 4 * (inp.word_count + out.word_count)
 
 
 def compact_record(inp: RecordLayout) -> int:
     """Octets of one embedded state with a CRC-32 of its expected outputs."""
-    return inp.dtype.itemsize + 4
+    return 4 * inp.word_count + 4
 
 
 class FirmwareError(MpcgenError):
@@ -202,14 +215,16 @@ class TestSet:
     out: RecordLayout
     full: bool = True
 
-    def context(self) -> dict[str, Any]:
-        """Values the template prints."""
-        ctx = {"name": self.name, "doc": self.doc, "n": len(self.states), "dump": self.dump,
-               "full": self.full, "states": self.inp.rows(self.states)}
+    def context(self, suffix: str = "u") -> dict[str, Any]:
+        """Values the template prints: the records' canonical words as initializer text (one numpy
+        pass each, :func:`~codegen.stages.fwdata.c_words`; ``suffix``: of the board's uint32_t)."""
+        ctx: dict[str, Any] = {"name": self.name, "doc": self.doc, "n": len(self.states), "dump": self.dump,
+                               "full": self.full, "states_words": c_words(self.inp.words(self.states), suffix=suffix)}
         if self.full:
-            ctx["expected"] = self.out.rows(self.expected)
+            ctx["expected_words"] = c_words(self.out.words(self.expected), suffix=suffix)
         else:
-            ctx["expected_crc"] = self.out.record_crcs(self.expected)
+            ctx["expected_crc_words"] = c_words(np.array(self.out.record_crcs(self.expected), np.uint32),
+                                                suffix=suffix)
         return ctx
 
 
@@ -226,6 +241,40 @@ def make_test_sets(model: Model, t: Any, n_selftest: int, n_bench: int,
         sets.append(TestSet("bench", f"{len(b)} {topo.trajectory_doc}", b, expected_outputs(topo, t, b),
                             True, inp, out))
     return sets
+
+
+#: suffix of a constant of the board's uint32_t, by board kind (the embedded words are constants of
+#: exactly that type, so the compiler converts none of them: arm-none-eabi-gcc's and cl2000's uint32_t
+#: is unsigned long, the host's unsigned int)
+UINT32_SUFFIX = {"arm": "ul", "c28x": "ul", "host": "u"}
+
+#: the runtime function building a record member from its 32-bit value, by value kind (firmware/runtime/mpc_runtime.h)
+VALUE_WRITERS = {"MPC_VALUE_F32": "mpc_f32_from_bits", "MPC_VALUE_I32": "mpc_i32_from_value",
+                 "MPC_VALUE_U16": "mpc_u16_from_value"}
+
+
+@dataclass(frozen=True)
+class ValueEntry:
+    """One row of a record's value table (templates/firmware/values.c.j2): member, kind, the runtime's
+    reader (member -> 32 bits) and writer (32 bits -> member), octet offset in the canonical layout."""
+
+    name: str
+    kind: str
+    reader: str
+    writer: str
+    offset: int
+
+
+def value_table(layout: RecordLayout) -> list[ValueEntry]:
+    """The value table of ``layout``, derived from its fields (``values``, ``value_offsets``); a value
+    the runtime cannot hold (not 2 or 4 octets, e.g. float64) is a FirmwareError."""
+    rows = []
+    for v, off in zip(layout.values, layout.value_offsets):
+        if v.kind not in VALUE_WRITERS:
+            raise FirmwareError(f"{layout.record.name}.{v.name}: a {v.kind} value has no firmware representation "
+                                f"(the firmware runtime holds float32, int32 and uint16 values)")
+        rows.append(ValueEntry(v.name, v.kind, v.reader, VALUE_WRITERS[v.kind], off))
+    return rows
 
 
 def _fit_budget(board: Board, sets: list[TestSet]) -> None:
@@ -272,6 +321,8 @@ def write_firmware_project(model: Model, tables: Any, board: str, outdir: Path,
     if n_selftest < 1:
         raise FirmwareError(f"n_selftest must be >= 1, got {n_selftest}")
     outdir = Path(outdir)
+    inp, out = layouts(model)
+    input_values, output_values = value_table(inp), value_table(out)  # refused before any work
     sets = make_test_sets(model, tables, n_selftest, n_bench, seed)
     _fit_budget(spec, sets)
     fw = firmware_dir()
@@ -286,17 +337,16 @@ def write_firmware_project(model: Model, tables: Any, board: str, outdir: Path,
                 files[f"firmware/ports/{d}/{p.name}"] = p.read_text()
     for f in spec.extra_files:
         files[f"firmware/ports/{spec.stack_dir}/{Path(f).name}"] = (fw / "ports" / f).read_text()
-    inp, out = layouts(model)
     env = environment()
-    env.filters["c_value"] = lambda v, kind: inp.nf.c_value(v) if kind == REAL else f"{int(v)}u"
     ctx = {"model_name": model.name, "config_hash": model.config_hash(), "version": __version__,
            "board": spec.name, "strategy": tables.strategy, "prefix": model.prefix,
-           "input_fields": inp.members, "output_fields": out.members,
-           "input_values": inp.values, "output_values": out.values,
+           "input_values": input_values, "output_values": output_values,
+           "input_words": inp.word_count, "output_words": out.word_count,
+           "input_octets": inp.packed_dtype.itemsize, "output_octets": out.packed_dtype.itemsize,
            "input_bits": inp.dtype.itemsize * 8, "output_bits": out.dtype.itemsize * 8,
            "reference": topo.reference,
            "states_doc": "; ".join(s.doc for s in sets),
-           "sets": [s.context() for s in sets]}
+           "sets": [s.context(UINT32_SUFFIX[spec.kind]) for s in sets]}
     files["gen/mpc_values.h"] = env.get_template("firmware/values.h.j2").render(ctx)
     files["gen/mpc_values.c"] = env.get_template("firmware/values.c.j2").render(ctx)
     files["gen/mpc_selftest_data.c"] = env.get_template("firmware/selftest_data.c.j2").render(ctx)
@@ -324,21 +374,110 @@ class BuildResult:
     max_frame_function: str = ""
     stack_path: list[str] = field(default_factory=list)
     stack_depth: int = 0
+    #: the build cache entry the build folder was restored from (None: built by make here)
+    reused: Path | None = None
 
 
-def build_firmware(project: Path, board: str, *, make_vars: dict[str, str] | None = None,
-                   timeout_s: float = 600) -> BuildResult:
-    """Run ``make`` in ``project``; BuildError-like FirmwareError with the compiler output on failure."""
+#: the build cache's folder of built firmware (one sealed entry per inputs hash, codegen.cache)
+IMAGE_CACHE = "firmware"
+#: the entry's archive of the project's build/ folder (its seal's payload) and its make log
+_ARCHIVE, _LOG = "build.tar.gz", "build.json"
+#: environment variables that change what the compiler or make read
+_BUILD_ENV = ("CPATH", "C_INCLUDE_PATH", "LIBRARY_PATH", "GCC_EXEC_PREFIX", "COMPILER_PATH", "MAKEFLAGS")
+
+
+def compiler_identity(compiler: str) -> str:
+    """The compiler's resolved path and its ``--version`` text (the package's version and revision)."""
+    path = shutil.which(compiler) or compiler
+    r = subprocess.run([path, "--version"], capture_output=True, text=True)
+    return f"{path}\n{r.stdout}{r.stderr}"
+
+
+def build_inputs_hash(project: Path, board: str, make_vars: dict[str, str] | None = None) -> str:
+    """SHA-256 (hex, 32 characters) of everything a build of ``project`` for ``board`` depends on: every
+    file of the project outside ``build/`` (sources, headers, Makefile with the compiler flags, linker
+    script, scripts: path and content), the ``make`` variables, the compiler's identity
+    (:func:`compiler_identity`; ``CC`` of ``make_vars`` if given) and the environment variables that
+    change what the compiler reads."""
     spec = board_spec(board)
-    require_tools(spec.tools + ((MAKE,) if spec.kind == "c28x" else ()))
     project = Path(project)
-    cmd = ["make", "-C", str(project), *[f"{k}={v}" for k, v in (make_vars or {}).items()]]
-    r = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout_s)
-    log = r.stdout + r.stderr
-    if r.returncode != 0:
-        raise FirmwareError(f"building the {board} firmware in {project} failed:\n{log}")
-    image = project / "build" / ("fw" if spec.kind == "host" else "fw.elf" if spec.kind == "arm" else "fw.out")
-    res = BuildResult(project, image, log)
+    make_vars = dict(make_vars or {})
+    cc = make_vars.get("CC") or ("arm-none-eabi-gcc" if spec.kind == "arm" else "gcc")
+    h = hashlib.sha256()
+    for part in (cache.LAYOUT, IMAGE_CACHE, board, repr(sorted(make_vars.items())), compiler_identity(cc),
+                 repr([(k, os.environ.get(k)) for k in _BUILD_ENV])):
+        h.update(part.encode() + b"\0")
+    files = sorted(p for p in project.rglob("*") if p.is_file()
+                   and not re.fullmatch(r"build(\.tmp\d+)?", p.relative_to(project).parts[0]))
+    for p in files:
+        h.update(p.relative_to(project).as_posix().encode() + b"\0")
+        h.update(hashlib.sha256(p.read_bytes()).digest())
+    return h.hexdigest()[:32]
+
+
+def _entry(board: str, key: str) -> Path:
+    return cache.cache_root() / IMAGE_CACHE / f"{board}-{key}"
+
+
+def _restore(entry: Path, project: Path) -> str | None:
+    """Unpack the entry's build folder into ``project``; its make log, or None (a damaged entry is
+    reported in one warning line and removed)."""
+    damaged = cache.sealed_ok(entry, entry / _ARCHIVE)
+    meta = cache.read_json(entry / _LOG) if damaged is None else None
+    if damaged is None and (not isinstance(meta, dict) or not isinstance(meta.get("log"), str)):
+        damaged = "no build log"
+    if damaged is not None:
+        cache.warn(f"cache entry {entry} is damaged ({damaged}); rebuilding it")
+        cache.discard(entry)
+        return None
+    assert isinstance(meta, dict)
+    tmp = project / f"build.tmp{os.getpid()}"
+    shutil.rmtree(tmp, ignore_errors=True)
+    tmp.mkdir()
+    try:
+        with tarfile.open(entry / _ARCHIVE, "r:gz") as tar:
+            members = tar.getmembers()
+            if any(m.name.startswith(("/", "..")) or ".." in Path(m.name).parts or not (m.isfile() or m.isdir())
+                   for m in members):
+                raise tarfile.TarError("a member outside the build folder")
+            if hasattr(tarfile, "data_filter"):  # Python 3.11.4+: refuse anything outside the folder too
+                tar.extractall(tmp, members, filter="data")
+            else:  # pragma: no cover - older Python 3.11
+                tar.extractall(tmp, members)
+        # every file as new as the sources just written: make takes the restored build as up to date
+        now = time.time()
+        for p in tmp.rglob("*"):
+            os.utime(p, (now, now))
+        os.replace(tmp / "build", project / "build")
+    except (tarfile.TarError, OSError, EOFError) as exc:
+        cache.warn(f"cache entry {entry} is damaged ({exc}); rebuilding it")
+        cache.discard(entry)
+        shutil.rmtree(project / "build", ignore_errors=True)
+        return None
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    return str(meta["log"])
+
+
+def _store(entry: Path, project: Path, log: str) -> None:
+    """The project's build folder and make log as a sealed cache entry (written aside, renamed into place)."""
+    tmp = entry.with_name(f"{entry.name}.tmp{os.getpid()}")
+    shutil.rmtree(tmp, ignore_errors=True)
+    tmp.mkdir(parents=True)
+    try:
+        with tarfile.open(tmp / _ARCHIVE, "w:gz", compresslevel=1) as tar:
+            tar.add(project / "build", arcname="build")
+        cache.write_json(tmp / _LOG, {"log": log})
+        cache.seal(tmp, tmp / _ARCHIVE)
+        os.replace(tmp, entry)
+    except OSError:  # another process stored the same inputs first (or the cache is full): keep going
+        pass
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _figures(res: BuildResult) -> BuildResult:
+    log = res.log
     m = re.search(r"^\s*(\d+)\s+(\d+)\s+(\d+)\s+\d+\s+[0-9a-f]+\s+\S*fw", log, re.M)
     if m:
         res.text, res.data, res.bss = (int(g) for g in m.groups())
@@ -349,3 +488,43 @@ def build_firmware(project: Path, board: str, *, make_vars: dict[str, str] | Non
     if m:
         res.stack_depth, res.stack_path = int(m.group(1)), m.group(2).split(" > ")
     return res
+
+
+def build_firmware(project: Path, board: str, *, make_vars: dict[str, str] | None = None,
+                   timeout_s: float = 600, reuse: bool = True,
+                   log: Callable[[str], None] | None = None) -> BuildResult:
+    """Run ``make`` in ``project``; FirmwareError with the compiler output on failure.
+
+    Built images are cached by content hash (``reuse``, Arm and host boards): a project without a
+    ``build/`` folder whose inputs hash (:func:`build_inputs_hash`: every source, the Makefile and its
+    flags, the make variables, the compiler's version) names a cache entry gets that entry's
+    ``build/`` folder (image, objects, stack files, map; as new as the sources, so a later ``make``
+    has nothing to do) and make log instead of a build, with a line to ``log`` and
+    ``BuildResult.reused`` set; otherwise make builds, and a build from a clean folder is stored.  A
+    project that already has a ``build/`` folder is always left to make (an incremental build: the
+    folder may hold objects compiled otherwise)."""
+    spec = board_spec(board)
+    require_tools(spec.tools + ((MAKE,) if spec.kind == "c28x" else ()))
+    project = Path(project)
+    image = project / "build" / ("fw" if spec.kind == "host" else "fw.elf" if spec.kind == "arm" else "fw.out")
+    entry = None
+    if reuse and spec.kind in ("arm", "host") and not (project / "build").exists():
+        key = build_inputs_hash(project, board, make_vars)
+        entry = _entry(board, key)
+        if entry.is_dir():
+            old = _restore(entry, project)
+            if old is not None and image.is_file():
+                line = (f"reused the {board} image built from identical inputs (sources, Makefile, flags, "
+                        f"compiler; inputs hash {key[:12]}): cache entry {entry}")
+                if log is not None:
+                    log(f"    {line}")
+                return _figures(BuildResult(project, image, f"mpcgen: {line}\n{old}", reused=entry))
+            shutil.rmtree(project / "build", ignore_errors=True)
+    cmd = ["make", "-C", str(project), *[f"{k}={v}" for k, v in (make_vars or {}).items()]]
+    r = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout_s)
+    out = r.stdout + r.stderr
+    if r.returncode != 0:
+        raise FirmwareError(f"building the {board} firmware in {project} failed:\n{out}")
+    if entry is not None and image.is_file():
+        _store(entry, project, out)
+    return _figures(BuildResult(project, image, out))

@@ -93,6 +93,24 @@ uint32_t mpc_u16_value(uint16_t value)
     return (uint32_t)value;
 }
 
+float mpc_f32_from_bits(uint32_t bits)
+{
+    float value;
+    memcpy(&value, &bits, sizeof value);
+    return value;
+}
+
+int32_t mpc_i32_from_value(uint32_t value)
+{
+    /* uint32 -> int32 above INT32_MAX is implementation-defined: spelled out (the inverse of mpc_i32_value) */
+    return (value <= 0x7FFFFFFFu) ? (int32_t)value : -(int32_t)(0xFFFFFFFFu - value) - 1;
+}
+
+uint16_t mpc_u16_from_value(uint32_t value)
+{
+    return (uint16_t)(value & 0xFFFFu);
+}
+
 uint32_t mpc_crc32(uint32_t crc, uint32_t value, uint16_t n_octets)
 {
     /* nibble table of the reflected polynomial 0xEDB88320 */

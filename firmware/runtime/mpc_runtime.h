@@ -43,6 +43,14 @@ uint32_t mpc_i32_value(int32_t value);
 /* A uint16 field as a 32-bit value. */
 uint32_t mpc_u16_value(uint16_t value);
 
+/* The inverses, bit for bit (decoding the embedded test records): the float32
+ * of bits `bits` (NaN payloads, -0.0 and infinities kept: the object is
+ * copied whole), the int32 of two's complement bits, the uint16 of a value's
+ * low 16 bits. */
+float mpc_f32_from_bits(uint32_t bits);
+int32_t mpc_i32_from_value(uint32_t value);
+uint16_t mpc_u16_from_value(uint32_t value);
+
 /* CRC-32 (IEEE 802.3, reflected, init/xorout 0xFFFFFFFF as zlib.crc32):
  * feed `n_octets` (1..4) octets of `value`, least significant first (the
  * canonical little-endian serialisation, independent of CHAR_BIT).

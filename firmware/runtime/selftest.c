@@ -21,6 +21,39 @@ uint32_t mpc_values_crc(uint32_t crc, const uint32_t *values, const mpc_value_de
     return crc;
 }
 
+/* `octets` (2 or 4) octets at octet `offset` of a canonical record, least significant first. */
+static uint32_t canonical_read(const uint32_t *words, uint16_t offset, uint16_t octets)
+{
+    uint32_t at = (uint32_t)offset >> 2;
+    uint32_t shift = 8u * ((uint32_t)offset & 3u);
+    uint32_t value = words[at] >> shift;
+    if (shift != 0u && shift + 8u * (uint32_t)octets > 32u) {
+        value |= words[at + 1u] << (32u - shift); /* the value continues in the next word */
+    }
+    return (octets == 2u) ? (value & 0xFFFFu) : value;
+}
+
+void mpc_values_unpack(const uint32_t *words, const mpc_value_desc_t *desc, uint16_t n, uint32_t *values)
+{
+    uint16_t k;
+    for (k = 0u; k < n; ++k) {
+        values[k] = canonical_read(words, desc[k].offset, (desc[k].kind == MPC_VALUE_U16) ? 2u : 4u);
+    }
+}
+
+void mpc_input_decode(const uint32_t words[MPC_INPUT_WORDS], mpc_input_t *in, uint32_t values[MPC_INPUT_NVALUES])
+{
+    mpc_values_unpack(words, mpc_input_desc, MPC_INPUT_NVALUES, values);
+    mpc_input_from_values(values, in);
+}
+
+void mpc_output_decode(const uint32_t words[MPC_OUTPUT_WORDS], mpc_output_t *out,
+                       uint32_t values[MPC_OUTPUT_NVALUES])
+{
+    mpc_values_unpack(words, mpc_output_desc, MPC_OUTPUT_NVALUES, values);
+    mpc_output_from_values(values, out);
+}
+
 static void put_value(const mpc_value_desc_t *d, uint32_t v)
 {
     if (d->kind != MPC_VALUE_U16) {
@@ -61,14 +94,17 @@ static void report_value(const char *set, uint32_t i, const mpc_value_desc_t *d,
 }
 
 /* Compare one state's outputs; print details if `detail`; return 1 on mismatch. */
-static uint16_t check_state(const mpc_testset_t *set, uint32_t i, const uint32_t gv[MPC_OUTPUT_NVALUES],
-                            uint16_t detail)
+static uint16_t check_state(const mpc_testset_t *set, uint32_t i, const mpc_input_t *in,
+                            const uint32_t gv[MPC_OUTPUT_NVALUES], uint16_t detail)
 {
+    static mpc_output_t expected; /* static: keeps the stack small on every board */
     uint16_t bad = 0u;
     uint16_t k;
     if (set->expected != NULL) {
         uint32_t ev[MPC_OUTPUT_NVALUES];
-        mpc_output_values(&set->expected[i], ev);
+        /* decoded into the record and flattened again: every run checks the output decoder too */
+        mpc_output_decode(&set->expected[i * MPC_OUTPUT_WORDS], &expected, ev);
+        mpc_output_values(&expected, ev);
         for (k = 0u; k < MPC_OUTPUT_NVALUES; ++k) {
             if (gv[k] != ev[k]) {
                 bad = 1u;
@@ -80,7 +116,7 @@ static uint16_t check_state(const mpc_testset_t *set, uint32_t i, const uint32_t
     } else {
         uint32_t crc = mpc_values_crc(0u, gv, mpc_output_desc, MPC_OUTPUT_NVALUES);
         if (crc != set->expected_crc[i]) {
-            static const mpc_value_desc_t crc_desc = {"output_crc", MPC_VALUE_F32};
+            static const mpc_value_desc_t crc_desc = {"output_crc", MPC_VALUE_F32, 0u};
             bad = 1u;
             if (detail != 0u) {
                 report_value(set->name, i, &crc_desc, crc, set->expected_crc[i]);
@@ -97,14 +133,15 @@ static uint16_t check_state(const mpc_testset_t *set, uint32_t i, const uint32_t
         }
     }
     if (bad != 0u && detail != 0u) {
-        report_state(set->name, i, &set->states[i]);
+        report_state(set->name, i, in);
     }
     return bad;
 }
 
 uint32_t mpc_selftest_run(const mpc_testset_t *set, uint32_t overhead)
 {
-    static mpc_output_t got; /* static: keeps the stack small on every board */
+    static mpc_input_t state; /* static: keeps the stack small on every board */
+    static mpc_output_t got;
     uint32_t gv[MPC_OUTPUT_NVALUES];
     uint32_t iv[MPC_INPUT_NVALUES];
     uint32_t i, mismatches = 0u, crc_in = 0u, crc_out = 0u;
@@ -118,8 +155,10 @@ uint32_t mpc_selftest_run(const mpc_testset_t *set, uint32_t overhead)
     console_kv_str("expect", (set->expected != NULL) ? "full" : "crc");
     console_eol();
     for (i = 0u; i < set->n; ++i) {
-        uint32_t raw = mpc_timed_step(&set->states[i], &got);
-        uint32_t net = (raw > overhead) ? (raw - overhead) : 0u;
+        uint32_t raw, net;
+        mpc_input_decode(&set->states[i * MPC_INPUT_WORDS], &state, iv);
+        raw = mpc_timed_step(&state, &got);
+        net = (raw > overhead) ? (raw - overhead) : 0u;
         if (net < cyc_min) {
             cyc_min = net;
         }
@@ -128,10 +167,10 @@ uint32_t mpc_selftest_run(const mpc_testset_t *set, uint32_t overhead)
         }
         cyc_sum += net;
         mpc_output_values(&got, gv);
-        mpc_input_values(&set->states[i], iv);
+        mpc_input_values(&state, iv); /* the step's actual input: crc_in checks the decoding */
         crc_out = mpc_values_crc(crc_out, gv, mpc_output_desc, MPC_OUTPUT_NVALUES);
         crc_in = mpc_values_crc(crc_in, iv, mpc_input_desc, MPC_INPUT_NVALUES);
-        if (check_state(set, i, gv, (uint16_t)(mismatches < MPC_SELFTEST_MAX_DETAILS)) != 0u) {
+        if (check_state(set, i, &state, gv, (uint16_t)(mismatches < MPC_SELFTEST_MAX_DETAILS)) != 0u) {
             ++mismatches;
         }
         if (set->dump_cycles != 0u) {
