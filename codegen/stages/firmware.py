@@ -168,11 +168,11 @@ _QEMU_M3 = ("mps2-an385", "cortex-m3")
 BOARDS: dict[str, Board] = {b.name: b for b in (
     Board("stm32h743", "stm32h743", "arm", ("cortex-m7", "stm32h743"), "stm32h743.ld",
           1792 * 1024, (ARM_GCC, MAKE), "NUCLEO-H743ZI2, 400 MHz, step in ITCM, tables in DTCM"),
-    Board(EMULATED_BOARD, "stm32h743", "arm", ("cortex-m7", EMULATED_BOARD), "qemu_m7.ld",
+    Board(EMULATED_BOARD, "stm32h743", "arm", ("cortex-m7", "qemu-mps2", EMULATED_BOARD), "qemu_m7.ld",
           3584 * 1024, (ARM_GCC, MAKE, QEMU), "QEMU mps2-an500 emulated Cortex-M7",
           " ".join(qemu_command("$(IMAGE)", "stdio", machine=_QEMU_M7)), qemu=_QEMU_M7),
     # no tightly coupled memories and no FPU: the host profile's C (no placement attributes)
-    Board(NOFPU_BOARD, "host", "arm", (NOFPU_BOARD,), "qemu_m3.ld", 3584 * 1024, (ARM_GCC, MAKE, QEMU),
+    Board(NOFPU_BOARD, "host", "arm", ("qemu-mps2", NOFPU_BOARD), "qemu_m3.ld", 3584 * 1024, (ARM_GCC, MAKE, QEMU),
           "QEMU mps2-an385 emulated Cortex-M3, no FPU (-mfloat-abi=soft)",
           " ".join(qemu_command("$(IMAGE)", "stdio", machine=_QEMU_M3)), M3_CPU_FLAGS, _QEMU_M3,
           NOFPU_BOARD, "m3_reset", ("cortex-m7/stackdepth.sh",)),
