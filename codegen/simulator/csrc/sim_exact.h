@@ -59,6 +59,7 @@
 #include <math.h>
 
 #include "pmsm_dq.h"
+#include "sim_inverter.h"
 
 /* sim_params_t.integrator */
 #define SIM_INTEGRATOR_RK4 0
@@ -485,6 +486,44 @@ static inline void sim_exact_keep(sim_exact_angle_t *a, double x3, double cs, do
         a->sn = sn;
         a->valid = 1;
     }
+}
+
+/* One interval of e over dt_s with the device drops, if on (drop_v > 0, n_dev devices in each leg's
+ * path), held at the phase currents' signs at its start (x[0], x[1] the dq currents, x[3] the angle,
+ * n_x states): 0, or -1 with x restored when a sign changed by the end (the caller integrates the
+ * interval with RK4 instead).  cos/sin of the angle: from ang at the start (may be NULL), of the end
+ * in *cs, *sn. */
+static inline int sim_exact_held_drops(sim_exact_t *e, double *x, int n_x, double drop_v, const double n_dev[3],
+                                       const sim_exact_angle_t *ang, double dt_s, double *cs, double *sn)
+{
+    double x0[PMSM_RK4_MAX], i0[3];
+    int k, leg;
+
+    sim_exact_cos_sin(ang, x[3], cs, sn);
+    if (drop_v > 0.0) {
+        double dua, dub;
+        sim_inverter_drop_ab(drop_v, n_dev, x[0], x[1], *cs, *sn, &dua, &dub);
+        e->ua0 += dua;
+        e->ub0 += dub;
+        sim_inverter_phase_currents(x[0], x[1], x[3], i0);
+        for (k = 0; k < n_x; ++k) {
+            x0[k] = x[k];
+        }
+    }
+    sim_exact_interval(e, x, cs, sn, dt_s);
+    if (drop_v > 0.0) {
+        double i1[3];
+        sim_inverter_phase_currents(x[0], x[1], x[3], i1);
+        for (leg = 0; leg < 3; ++leg) {
+            if (sim_inverter_sign(i1[leg]) != sim_inverter_sign(i0[leg])) {
+                for (k = 0; k < n_x; ++k) {
+                    x[k] = x0[k];
+                }
+                return -1;
+            }
+        }
+    }
+    return 0;
 }
 
 #endif /* SIM_EXACT_H */

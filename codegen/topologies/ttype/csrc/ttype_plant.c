@@ -83,8 +83,7 @@ static void setup(ttype_rhs_t *c, const ttype_sim_params_t *p, const int lv[3], 
 static int exact_levels(const ttype_rhs_t *c, double *x, double dt_s, sim_exact_angle_t *ang)
 {
     sim_exact_t e;
-    double x0[PMSM_RK4_MAX], i0[3], cs, sn;
-    int k, leg;
+    double cs, sn;
 
     e.m = c->m;
     e.ua0 = c->ua0;
@@ -94,29 +93,8 @@ static int exact_levels(const ttype_rhs_t *c, double *x, double dt_s, sim_exact_
     e.ka = c->ka;
     e.kb = c->kb;
     e.np = !c->zero_u;
-    sim_exact_cos_sin(ang, x[3], &cs, &sn);
-    if (c->drop_v > 0.0) {
-        double dua, dub;
-        sim_inverter_drop_ab(c->drop_v, c->n_dev, x[0], x[1], cs, sn, &dua, &dub);
-        e.ua0 += dua;
-        e.ub0 += dub;
-        sim_inverter_phase_currents(x[0], x[1], x[3], i0);
-        for (k = 0; k < 5; ++k) {
-            x0[k] = x[k];
-        }
-    }
-    sim_exact_interval(&e, x, &cs, &sn, dt_s);
-    if (c->drop_v > 0.0) {
-        double i1[3];
-        sim_inverter_phase_currents(x[0], x[1], x[3], i1);
-        for (leg = 0; leg < 3; ++leg) {
-            if (sim_inverter_sign(i1[leg]) != sim_inverter_sign(i0[leg])) {
-                for (k = 0; k < 5; ++k) {
-                    x[k] = x0[k];
-                }
-                return -1;
-            }
-        }
+    if (sim_exact_held_drops(&e, x, 5, c->drop_v, c->n_dev, ang, dt_s, &cs, &sn) != 0) {
+        return -1;
     }
     sim_exact_keep(ang, x[3], cs, sn);
     return 0;

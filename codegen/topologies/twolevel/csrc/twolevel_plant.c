@@ -50,37 +50,15 @@ static int exact_levels(const twolevel_rhs_t *c, double *x, double dt_s, sim_exa
     /* devices in each leg's conducting path (one switch or diode), as twolevel_rhs */
     static const double n_dev[3] = {1.0, 1.0, 1.0};
     sim_exact_t e;
-    double x0[PMSM_RK4_MAX], i0[3], cs, sn;
-    int k, leg;
+    double cs, sn;
 
     e.m = c->m;
     e.ua0 = c->u_alpha;
     e.ub0 = c->u_beta;
     e.ua1 = e.ub1 = e.ka = e.kb = 0.0;
     e.np = 0;
-    sim_exact_cos_sin(ang, x[3], &cs, &sn);
-    if (c->drop_v > 0.0) {
-        double dua, dub;
-        sim_inverter_drop_ab(c->drop_v, n_dev, x[0], x[1], cs, sn, &dua, &dub);
-        e.ua0 += dua;
-        e.ub0 += dub;
-        sim_inverter_phase_currents(x[0], x[1], x[3], i0);
-        for (k = 0; k < 4; ++k) {
-            x0[k] = x[k];
-        }
-    }
-    sim_exact_interval(&e, x, &cs, &sn, dt_s);
-    if (c->drop_v > 0.0) {
-        double i1[3];
-        sim_inverter_phase_currents(x[0], x[1], x[3], i1);
-        for (leg = 0; leg < 3; ++leg) {
-            if (sim_inverter_sign(i1[leg]) != sim_inverter_sign(i0[leg])) {
-                for (k = 0; k < 4; ++k) {
-                    x[k] = x0[k];
-                }
-                return -1;
-            }
-        }
+    if (sim_exact_held_drops(&e, x, 4, c->drop_v, n_dev, ang, dt_s, &cs, &sn) != 0) {
+        return -1;
     }
     x[3] = pmsm_dq_wrap(x[3]);
     sim_exact_keep(ang, x[3], cs, sn);
