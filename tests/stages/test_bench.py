@@ -21,7 +21,10 @@ def test_host_bench(tmp_path, capsys):
     for s in TWO_LEVEL:
         e = data["strategies"][s]
         assert e["host_ns_per_step"] > 0 and e["ratio_to_conventional"] > 0
+        # CPU time, interleaved rounds: the fastest round, the median beside it and their spread
+        assert e["host_ns_median"] >= e["host_ns_per_step"] and e["host_ns_spread"] >= 0
     assert data["strategies"]["conventional"]["ratio_to_conventional"] == 1.0
+    assert "thread_time_ns" in data["host_timing"] and "2 rounds" in data["host_timing"]
     # the plant's integrators side by side: periods/s of the scenario, current error against DOP853
     sim = data["simulator"]
     assert sim["periods"] == 80_000 and sim["error_periods"] == 1000 and sim["rounds"] == 2
@@ -30,6 +33,7 @@ def test_host_bench(tmp_path, capsys):
         assert e["periods_per_s"] > 0 and 0 <= e["max_current_error_a"] < 1e-9 and e["decisions_identical"]
     out = capsys.readouterr().out
     assert "host ns/step" in out and "simulator periods/s" in out and "exact" in out
+    assert "host timing: CPU time of the timing thread" in out and "spread" in out
 
 
 @pytest.mark.slow
