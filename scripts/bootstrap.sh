@@ -18,6 +18,7 @@ command -v git >/dev/null 2>&1 || need_apt+=(git)
 command -v arm-none-eabi-gcc >/dev/null 2>&1 || need_apt+=(gcc-arm-none-eabi)
 [ -e /usr/lib/arm-none-eabi/newlib/libc.a ] || [ -e /usr/lib/arm-none-eabi/lib/libc.a ] || need_apt+=(libnewlib-arm-none-eabi)
 command -v qemu-system-arm >/dev/null 2>&1 || need_apt+=(qemu-system-arm)
+command -v openssl >/dev/null 2>&1 || need_apt+=(openssl)  # TLS certificates of the Dask tests
 # llvm-mca (Cortex-M7 pipeline model) for the cycle estimate of `mpcgen bench --emulated` (codegen/stages/cycles.py)
 command -v llvm-mca >/dev/null 2>&1 || [ -n "$(ls /usr/lib/llvm-*/bin/llvm-mca 2>/dev/null)" ] || need_apt+=(llvm)
 command -v gcc >/dev/null 2>&1 || need_apt+=(gcc)

@@ -8,7 +8,6 @@ without credentials, or with a certificate of another CA, is refused.
 from __future__ import annotations
 
 import json
-import shutil
 import subprocess
 from pathlib import Path
 
@@ -18,16 +17,14 @@ from codegen.cli import main
 from codegen.errors import UsageError
 from codegen.stages import sweep_runner
 
-from conftest import SPMSM
-
-pytestmark = pytest.mark.skipif(shutil.which("openssl") is None, reason="needs the openssl command")
+from conftest import SPMSM, require_tool
 
 SHORT = ["--set", "scenario.duration_s=0.3", "--set", "scenario.window_s=0.1",
          "--set", "scenario.speed_ref_rpm=[[0.0, 500.0]]", "--set", "scenario.load_nm=[[0.0, 10.0]]"]
 
 
 def _openssl(*args: str, cwd: Path) -> None:
-    subprocess.run(["openssl", *args], cwd=cwd, check=True, capture_output=True)
+    subprocess.run([require_tool("openssl", "openssl"), *args], cwd=cwd, check=True, capture_output=True)
 
 
 def _credentials(d: Path, name: str) -> dict[str, Path]:
