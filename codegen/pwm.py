@@ -34,7 +34,9 @@ is refused naming ``controller.dt_s``.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 from codegen.errors import ConfigError
 from codegen.model import Model
@@ -82,6 +84,21 @@ TIMERS: dict[str, TimerTarget] = {t.target: t for t in (
 def modulated_targets() -> tuple[str, ...]:
     """The targets ``generate`` writes a modulator for (the host target drives no power stage)."""
     return tuple(TIMERS)
+
+
+def render_modulator_files(model: Model, target: str, topology_dir: str,
+                           context: Callable[[], dict[str, Any]]) -> dict[str, str]:
+    """File name -> text of ``<prefix>_modulator.h/.c`` and ``<prefix>_isr_example.c`` for ``target`` from
+    ``templates/<topology_dir>/`` and the topology's ``context()`` (none for the host target, which drives
+    no power stage)."""
+    if target not in modulated_targets():
+        return {}
+    from codegen.render import render_files
+
+    p = model.prefix
+    return render_files({f"{p}_modulator.h": f"{topology_dir}/modulator.h.j2",
+                         f"{p}_modulator.c": f"{topology_dir}/modulator.c.j2",
+                         f"{p}_isr_example.c": f"{topology_dir}/isr_{target}.c.j2"}, context())
 
 
 def stm32_dtg(ticks: int) -> tuple[int, int]:

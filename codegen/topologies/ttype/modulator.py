@@ -43,12 +43,12 @@ from codegen.pwm import (
     adc_placeholders,
     f28_epwm_setup,
     isr_inputs,
-    modulated_targets,
     pwm_timing,
+    render_modulator_files,
     stm32_gpio_setup,
     stm32_timer_setup,
 )
-from codegen.render import base_context, render_files
+from codegen.render import base_context
 from codegen.topologies.ttype import vectors as v
 from codegen.topologies.ttype.derive import ThreeLevelTables
 from codegen.topologies.ttype.records import INPUT, N_SEGMENTS, SAFE_STATE
@@ -214,9 +214,4 @@ def adc_literals(adc: dict[str, float]) -> dict[str, Any]:
 def render_modulator(model: Model, t: ThreeLevelTables, target: str) -> dict[str, str]:
     """File name -> text of ``<prefix>_modulator.h/.c`` and ``<prefix>_isr_example.c`` for ``target``
     (none for the host target, which drives no power stage)."""
-    if target not in modulated_targets():
-        return {}
-    ctx = modulator_context(model, t, target)
-    p = model.prefix
-    return render_files({f"{p}_modulator.h": "ttype/modulator.h.j2", f"{p}_modulator.c": "ttype/modulator.c.j2",
-                         f"{p}_isr_example.c": f"ttype/isr_{target}.c.j2"}, ctx)
+    return render_modulator_files(model, target, "ttype", lambda: modulator_context(model, t, target))

@@ -40,12 +40,12 @@ from codegen.pwm import (
     adc_placeholders,
     f28_epwm_setup,
     isr_inputs,
-    modulated_targets,
     pwm_timing,
+    render_modulator_files,
     stm32_gpio_setup,
     stm32_timer_setup,
 )
-from codegen.render import base_context, render_files
+from codegen.render import base_context
 from codegen.topologies.twolevel.derive import TwoLevelTables
 from codegen.topologies.twolevel.records import INPUT
 
@@ -125,9 +125,4 @@ def modulator_context(model: Model, t: TwoLevelTables, target: str) -> dict[str,
 def render_modulator(model: Model, t: TwoLevelTables, target: str) -> dict[str, str]:
     """File name -> text of ``<prefix>_modulator.h/.c`` and ``<prefix>_isr_example.c`` for ``target``
     (none for the host target, which drives no power stage)."""
-    if target not in modulated_targets():
-        return {}
-    ctx = modulator_context(model, t, target)
-    p = model.prefix
-    return render_files({f"{p}_modulator.h": "twolevel/modulator.h.j2", f"{p}_modulator.c": "twolevel/modulator.c.j2",
-                         f"{p}_isr_example.c": f"twolevel/isr_{target}.c.j2"}, ctx)
+    return render_modulator_files(model, target, "twolevel", lambda: modulator_context(model, t, target))
