@@ -187,7 +187,7 @@ class Plant:
     measurement_delay_s: float = 0.0
     #: how the simulator integrates the plant (docs/simulation.md "Integration"): "rk4" RK4 sub-steps of
     #: at most 1 us, "exact" the Taylor series of each constant-voltage piece summed to double rounding
-    integrator: Literal["rk4", "exact"] = "rk4"
+    integrator: Literal["rk4", "exact"] = "exact"
 
     #: the values of ``integrator``, in the simulator's order (``sim_params_t.integrator``)
     INTEGRATORS = ("rk4", "exact")

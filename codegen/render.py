@@ -26,6 +26,7 @@ from codegen.numfmt.interface import field_formats
 from codegen.outputs import output_error, write_atomic
 from codegen.records import REAL, Record
 from codegen.resources import templates_dir
+from codegen.templatecache import SealedBytecodeCache
 
 
 @dataclass(frozen=True)
@@ -79,12 +80,14 @@ class TableRow:
 def environment(format_name: str | None = None) -> jinja2.Environment:
     """The jinja2 environment: strict undefined, no autoescape, the ``interleave`` filter and, with a
     number format's name, its ``real_literal`` filter (exact C literal of a value in the format).  One per
-    format and process (jinja2 keeps the compiled templates, reloading a template whose file changed)."""
+    format and process (jinja2 keeps the compiled templates, reloading a template whose file changed); the
+    compiled code is kept across processes (:mod:`codegen.templatecache`)."""
     env = jinja2.Environment(
         loader=jinja2.FileSystemLoader(str(templates_dir())),
         undefined=jinja2.StrictUndefined,
         keep_trailing_newline=True,
         autoescape=False,
+        bytecode_cache=SealedBytecodeCache(),
     )
     env.filters["interleave"] = interleave_lines
     if format_name is not None:

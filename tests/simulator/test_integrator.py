@@ -70,7 +70,7 @@ def _trace(name: str, integrator: str) -> Any:
 def test_config_field():
     m = load_config(EXAMPLES / "seed001_spmsm.toml", {"plant.integrator": "exact"})
     assert m.plant.integrator == "exact"
-    assert load_config(EXAMPLES / "seed001_spmsm.toml").plant.integrator == "rk4"  # the default
+    assert load_config(EXAMPLES / "seed001_spmsm.toml").plant.integrator == "exact"  # the default
     with pytest.raises(ConfigError) as e:
         load_config(EXAMPLES / "seed001_spmsm.toml", {"plant.integrator": "euler"})
     assert "\n" not in str(e.value) and "rk4, exact" in str(e.value)
