@@ -40,6 +40,7 @@ from typing import Any
 
 from codegen.errors import ConfigError
 from codegen.model import Model
+from codegen.numfmt.float32 import c_float_literal, f32
 
 __all__ = ["DEFAULT_DEAD_TIME_S", "DEFAULT_MIN_PULSE_S", "TIMERS", "TimerTarget", "PwmTiming", "pwm_timing",
            "stm32_dtg", "RegWrite", "modulated_targets", "stm32_timer_setup", "stm32_gpio_setup", "f28_epwm_setup",
@@ -146,7 +147,13 @@ class PwmTiming:
 
     @property
     def ticks_per_period(self) -> int:
+        """2 A: counter ticks per PWM period."""
         return 2 * self.period_counts
+
+    @property
+    def control_period_s(self) -> float:
+        """controller.dt_s, the period the PWM period approximates (``pwm_period_s / (1 + period_error)``)."""
+        return self.pwm_period_s / (1.0 + self.period_error)
 
 
 def pwm_timing(model: Model, target: str, pulses_per_period: int, *, dead_time_s: float = DEFAULT_DEAD_TIME_S,
@@ -347,13 +354,16 @@ def f28_epwm_setup(timing: PwmTiming, module: int, load: str, soc: str | None, i
 ADC_BITS: dict[str, int] = {"stm32h743": 16, "tms320f28377": 12}
 
 
-def adc_placeholders(target: str, current_full_a: float, voltage_full_v: float) -> dict[str, float]:
+def adc_placeholders(target: str, current_full_a: float, voltage_full_v: float) -> dict[str, object]:
     """Placeholder sensor scaling of the example (the user sets the board's): a bipolar current
     sensor spanning +-``current_full_a`` over the ADC range around mid-scale, a voltage divider giving
-    ``voltage_full_v`` at full scale."""
+    ``voltage_full_v`` at full scale; with the float32 C literals of mid-scale and both gains."""
     full = float(1 << ADC_BITS[target])
-    return {"adc_full": full, "adc_mid": full / 2.0, "amps_per_count": 2.0 * current_full_a / full,
-            "volts_per_count": voltage_full_v / full}
+    amps, volts = 2.0 * current_full_a / full, voltage_full_v / full
+    return {"adc_full": full, "adc_mid": full / 2.0, "amps_per_count": amps, "volts_per_count": volts,
+            "current_span_a": current_full_a, "voltage_span_v": voltage_full_v,
+            "mid_literal": c_float_literal(f32(full / 2.0)), "amps_literal": c_float_literal(f32(amps)),
+            "volts_literal": c_float_literal(f32(volts))}
 
 
 @dataclass(frozen=True)

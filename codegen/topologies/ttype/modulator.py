@@ -178,7 +178,8 @@ def modulator_context(model: Model, t: ThreeLevelTables, target: str) -> dict[st
     for seq in t.seq:  # every sequence of the step is what the modulator assumes (asserted once, here)
         sequence_runs(seq)
     ctx = {**base_context(model, target), "target": target, "pwm": pwm, "a": a, "m": m,
-           "max_inner": a - m // 2, "n_channels": len(CHANNELS), "n_segments": N_SEGMENTS, "n_states": v.N_STATES,
+           "max_inner": a - m // 2, "n_channels": len(CHANNELS), "n_segments": N_SEGMENTS,
+           "last_segment": N_SEGMENTS - 1, "n_states": v.N_STATES,
            "safe_state": SAFE_STATE, "safe_lead": [a if r >= 4 else 0 for r in safe_runs],
            "channels": CHANNELS, "states": states, "strategy": t.strategy,
            **_seconds_to_counts(t, pwm), "encode": _input_encoding(t),
@@ -198,17 +199,10 @@ def modulator_context(model: Model, t: ThreeLevelTables, target: str) -> dict[st
                                                  model.prefix.upper())
                                  for ch in CHANNELS]}
     inv = model.inverter
-    ctx["adc"] = adc_literals(adc_placeholders(target, 1.25 * inv.i_trip_a, 0.625 * inv.udc_max_v))
+    ctx["adc"] = adc_placeholders(target, 1.25 * inv.i_trip_a, 0.625 * inv.udc_max_v)
     ctx["inputs"] = isr_inputs(target, model.prefix, (("uc1_v", "upper DC-link capacitor voltage, V"),
                                                       ("uc2_v", "lower DC-link capacitor voltage, V")))
     return ctx
-
-
-def adc_literals(adc: dict[str, float]) -> dict[str, Any]:
-    """The placeholder sensor scaling with its float32 C literals."""
-    return {**adc, "mid_literal": c_float_literal(f32(adc["adc_mid"])),
-            "amps_literal": c_float_literal(f32(adc["amps_per_count"])),
-            "volts_literal": c_float_literal(f32(adc["volts_per_count"]))}
 
 
 def render_modulator(model: Model, t: ThreeLevelTables, target: str) -> dict[str, str]:

@@ -114,10 +114,7 @@ def modulator_context(model: Model, t: TwoLevelTables, target: str) -> dict[str,
         ctx["setup"] = {"epwm": [f28_epwm_setup(pwm, leg.epwm, load, "zero" if leg.epwm == 1 else None, CSF_LOW,
                                                  model.prefix.upper()) for leg in LEGS]}
     inv = model.inverter
-    adc = adc_placeholders(target, 1.25 * inv.i_trip_a, 1.25 * inv.udc_max_v)
-    ctx["adc"] = {**adc, "mid_literal": c_float_literal(f32(adc["adc_mid"])),
-                  "amps_literal": c_float_literal(f32(adc["amps_per_count"])),
-                  "volts_literal": c_float_literal(f32(adc["volts_per_count"]))}
+    ctx["adc"] = adc_placeholders(target, 1.25 * inv.i_trip_a, 1.25 * inv.udc_max_v)
     ctx["inputs"] = isr_inputs(target, model.prefix, (("udc_v", "DC-link voltage, V"),))
     return ctx
 
