@@ -145,13 +145,22 @@ def load_model(args: argparse.Namespace) -> Model:
 
 
 def _strategies(args: argparse.Namespace, model: Model) -> list[str]:
-    """``--strategies`` (a comma list), else ``--strategy`` alone, else every strategy of the topology."""
+    """``--strategies`` (a comma list), else ``--strategy`` alone, else every strategy of the config
+    strategy's family (``codegen.config.family_strategies``: a strategy of another family reads other
+    config fields)."""
     listed = getattr(args, "strategies", None)
     if listed is not None and getattr(args, "strategy", None) is not None:
         raise UsageError("--strategy and --strategies: give one of them")
     if listed is None and getattr(args, "strategy", None) is not None:
         return [model.controller.strategy]
-    return cliargs.strategy_list("--strategies", listed, model, topology_of(model).strategies)
+    return cliargs.strategy_list("--strategies", listed, model, _family(model))
+
+
+def _family(model: Model) -> tuple[str, ...]:
+    """The strategies of the family of ``model``'s strategy, in report order."""
+    from codegen.config import family_strategies
+
+    return family_strategies(model.inverter.topology, model.controller.strategy)
 
 
 def write_json(path: str | Path | None, data: dict[str, Any]) -> None:
@@ -623,7 +632,7 @@ def _evidence_identities(model: Model, named: set[str], log: Log) -> dict[str, A
     for label, m in variants:
         if named <= ids.keys():
             break
-        trained = with_trained_tables(m, topology_of(m).strategies, log)
+        trained = with_trained_tables(m, _family(m), log)
         ids.setdefault(trained.config_hash(), Identity(f"{label}, with trained tables", m.controller.number_format))
     return ids
 

@@ -92,7 +92,8 @@ def output_file(option: str, path: str | Path | None) -> Path | None:
 
 
 def strategy_list(option: str, text: str | None, model: Model, family: tuple[str, ...]) -> list[str]:
-    """The strategies named by a comma list (all of the topology when the option is absent)."""
+    """The strategies named by a comma list (all of ``family`` when the option is absent): the config
+    strategy's family (``codegen.config.family_strategies``)."""
     if text is None:
         return list(family)
     chosen = [s.strip() for s in text.split(",") if s.strip()]
@@ -100,8 +101,9 @@ def strategy_list(option: str, text: str | None, model: Model, family: tuple[str
         raise UsageError(f"{option} = {text!r}: names no strategy; allowed: {', '.join(family)}")
     for s in chosen:
         if s not in family:
-            raise UsageError(f"{option}: '{s}' is not a strategy of a {model.inverter.topology} inverter; "
-                             f"allowed: {', '.join(family)}")
+            raise UsageError(f"{option}: '{s}' is not a strategy of a {model.inverter.topology} inverter in the "
+                             f"family of controller.strategy = '{model.controller.strategy}'; allowed: "
+                             f"{', '.join(family)} (another family: set controller.strategy and its fields)")
     return chosen
 
 

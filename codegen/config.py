@@ -52,6 +52,7 @@ from codegen.operating import Finding, operating_findings
 from codegen.registry import topology_module, topology_names
 
 __all__ = ["load_config", "parse_override", "COMMON_SCHEMA", "schema_for", "all_fields", "owners", "strategies_of",
+           "family_of", "family_strategies",
            "topology_section", "TopologySection", "Spec", "Interval", "Ref"]
 
 #: ``ConfigError.file`` for errors in command-line ``--set`` strings.
@@ -166,6 +167,10 @@ class Spec:
     boolean with ``choices`` allows only those values).  ``required``: the
     file must give the field, whatever the model's default (a field that
     only one topology has keeps a default in the model for the others).
+    ``families``: the strategy families (``TopologySection.families``) whose
+    strategies read the field; empty: every strategy.  Under a strategy of
+    another family the field is refused when given and keeps the model's
+    default, and ``required`` applies only inside the families.
     """
 
     kind: str
@@ -175,6 +180,7 @@ class Spec:
     hint_low: str = ""
     hint_high: str = ""
     required: bool = False
+    families: tuple[str, ...] = ()
 
 
 def open_closed(lo: Bound, hi: Bound) -> Interval:
@@ -312,6 +318,10 @@ class TopologySection(Protocol):
 
     #: every strategy, in report order; the first is the baseline the others are compared to
     strategies: tuple[str, ...]
+    #: strategy family -> its strategies (each strategy in one family, in report order): a command that
+    #: runs several strategies runs the family of the config's strategy, and a field whose spec names
+    #: families is read only by their strategies
+    families: Mapping[str, tuple[str, ...]]
     #: the fields only this topology has, in check order (checked after :data:`COMMON_SCHEMA`)
     fields: Mapping[str, Spec]
     #: common fields whose allowed values this topology narrows (or widens)
@@ -341,6 +351,20 @@ def topology_section(name: str) -> TopologySection:
 def strategies_of(topology: str) -> tuple[str, ...]:
     """The strategies of ``topology``, in report order."""
     return topology_section(topology).strategies
+
+
+def family_of(topology: str, strategy: str) -> str:
+    """The strategy family of ``strategy`` of ``topology`` (a key of its section's ``families``)."""
+    for name, members in topology_section(topology).families.items():
+        if strategy in members:
+            return name
+    raise ValueError(f"strategy {strategy!r} of {topology!r} is in no family")
+
+
+def family_strategies(topology: str, strategy: str) -> tuple[str, ...]:
+    """The strategies of the family ``strategy`` belongs to, in report order (what a command runs by
+    default: the config's strategy and its siblings, never another family's)."""
+    return topology_section(topology).families[family_of(topology, strategy)]
 
 
 @functools.cache
@@ -401,9 +425,10 @@ def _is_required(schema: Mapping[str, Spec], path: str) -> bool:
     return schema[path].required or _default(path) is MISSING
 
 
-def _required(schema: Mapping[str, Spec], section: str) -> bool:
-    """A section is required if it has a required field."""
-    return any(_is_required(schema, f"{section}.{k}") for k in _fields_of(schema, section))
+def _required(schema: Mapping[str, Spec], section: str, family: str | None = None) -> bool:
+    """A section is required if it has a required field (that the strategy's ``family`` reads)."""
+    return any(_is_required(schema, f"{section}.{k}") and not _outside_family(schema[f"{section}.{k}"], family)
+               and not _family_unknown(schema[f"{section}.{k}"], family) for k in _fields_of(schema, section))
 
 
 # --------------------------------------------------------------------------
@@ -714,15 +739,38 @@ def _topology(ck: _Checker, data: dict[str, Any]) -> str:
     return name
 
 
-def _collect(ck: _Checker, schema: Mapping[str, Spec], data: dict[str, Any]) -> dict[str, object]:
-    """Check the document's structure; return raw values by dotted path (defaults filled in)."""
+def _family(ck: _Checker, data: dict[str, Any], topology: str) -> str | None:
+    """The strategy family of the file's ``controller.strategy`` (None when it names no strategy of the
+    topology: the field's own check reports that)."""
+    controller = data.get("controller")
+    value = controller.get("strategy") if isinstance(controller, dict) else None
+    if not isinstance(value, str) or value not in strategies_of(topology):
+        return None
+    return family_of(topology, value)
+
+
+def _outside_family(spec: Spec, family: str | None) -> bool:
+    """The field is read by no strategy of ``family`` (None: unknown yet, nothing refused)."""
+    return bool(spec.families) and family is not None and family not in spec.families
+
+
+def _family_unknown(spec: Spec, family: str | None) -> bool:
+    """The field belongs to some families and the strategy names none (its own check will say so):
+    the field is not required yet."""
+    return bool(spec.families) and family is None
+
+
+def _collect(ck: _Checker, schema: Mapping[str, Spec], data: dict[str, Any],
+             family: str | None = None) -> dict[str, object]:
+    """Check the document's structure; return raw values by dotted path (defaults filled in).  A field
+    that the strategy's ``family`` does not read is refused when given, and defaulted."""
     _check_keys(ck, schema, "", data)
     raw: dict[str, object] = {}
     sections = _sections(schema)
     for section in sections:
         table = _lookup_table(ck, data, section)
         if table is None:
-            if _required(schema, section):
+            if _required(schema, section, family):
                 ck.fail(section, MISSING, f"required section [{section}] is missing; "
                         f"sections: {', '.join(f'[{s}]' for s in sections)}")
             table = {}
@@ -730,7 +778,15 @@ def _collect(ck: _Checker, schema: Mapping[str, Spec], data: dict[str, Any]) -> 
             _check_keys(ck, schema, section, table)
         for key in _fields_of(schema, section):
             path = f"{section}.{key}"
-            if key not in table and _is_required(schema, path):
+            spec = schema[path]
+            if _outside_family(spec, family):
+                if key in table:
+                    strategy = data["controller"]["strategy"]
+                    ck.fail(path, table[key], f"is ignored by controller.strategy = '{strategy}' (only the "
+                            f"{' and '.join(spec.families)} strategies read it): remove it")
+                raw[path] = _default(path)
+                continue
+            if key not in table and _is_required(schema, path) and not _family_unknown(spec, family):
                 ck.fail(path, MISSING, f"required field missing in [{section}]; "
                         f"fields: {', '.join(_fields_of(schema, section))}")
             raw[path] = table[key] if key in table else _default(path)
@@ -782,8 +838,12 @@ def load_config(path: str | Path, overrides: Mapping[str, object] | None = None)
     topology = _topology(ck, data)
     schema = schema_for(topology)
     section = topology_section(topology)
-    raw = _collect(ck, schema, data)
+    family = _family(ck, data, topology)
+    raw = _collect(ck, schema, data, family)
     for field_path, spec in schema.items():
+        if _outside_family(spec, family):  # the model's default, unread by this strategy
+            ck.values[field_path] = raw[field_path]
+            continue
         _check_foreign_value(ck, schema, field_path, raw[field_path])
         ck.values[field_path] = _CHECKS[spec.kind](ck, field_path, raw[field_path], spec)
     section.check(ck.values, ck.fail)

@@ -119,6 +119,21 @@ class Controller:
     #: two-level cost: weight of the squared normalised flux term, g = e_T^2 + lambda_psi e_psi^2
     #: (dimensionless; 1 is the papers' cost, bit for bit: no multiplication is emitted)
     lambda_psi: float = 1.0
+    # long-horizon current control with a sphere decoder (strategy family "mpcc", docs/mpcc.md); both
+    # topologies' sections mark horizon and lambda_u required for it and refuse them elsewhere
+    #: prediction horizon N (periods); the decision is the first element of the optimal sequence
+    horizon: int = 1
+    #: switching weight of the cost sum ||i* - i||^2 + lambda_u ||du||^2, A^2 per unit position change squared
+    lambda_u: float = 0.0
+    #: nodes the sphere decoder may visit per step (None: the estimate of codegen.mpcc.lattice.default_node_budget)
+    node_budget: int | None = None
+    #: T-type long-horizon only: neutral-point weight of the cost term lambda_vo V_o(k+d+1)^2, A^2/V^2
+    #: (docs/mpcc.md eq. (14)); the default is the T-type family's when the config leaves it out
+    lambda_vo_a2_per_v2: float = 10.0
+
+
+#: the long-horizon fields of :class:`Controller` and their defaults (left out of ``as_dict`` at them)
+MPCC_DEFAULTS: dict[str, object] = {"horizon": 1, "lambda_u": 0.0, "node_budget": None, "lambda_vo_a2_per_v2": 10.0}
 
 
 @dataclass(frozen=True)
@@ -248,6 +263,9 @@ class Model:
         trained = d["controller"].pop("trained_tables")
         if trained is not None:  # the file's SHA-256 stands for them (a model without them hashes as before)
             d["controller"]["trained_tables_sha256"] = trained[0]
+        for name, default in MPCC_DEFAULTS.items():  # at their defaults: a model hashes as it did before them
+            if d["controller"][name] == default:
+                d["controller"].pop(name)
         return d
 
     def config_hash(self) -> str:

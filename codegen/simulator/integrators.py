@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from codegen.config import family_strategies
 from codegen.model import Model, Plant
 from codegen.simulator import tightref
 
@@ -42,12 +43,12 @@ def same_decisions(a: Any, b: Any, decision_field: str) -> bool:
 
 def compare(topo: Any, model: Model, rounds: int = 5, error_periods: int = ERROR_PERIODS,
             log: Callable[[str], None] = print) -> dict[str, Any]:
-    """Every integrator on the config's scenario (the topology's baseline strategy, ``topo``: its plugin):
+    """Every integrator on the config's scenario (the baseline strategy of the config strategy's family, ``topo``: its plugin):
     ``periods``, per integrator ``periods_per_s`` (best of ``rounds`` interleaved runs) and
     ``max_current_error_a`` (against DOP853 over the first ``error_periods``), and whether each run's
     decisions equal the first integrator's (``decisions_identical``, :func:`same_decisions`, over the
     whole scenario)."""
-    base = model.with_controller(strategy=topo.strategies[0])
+    base = model.with_controller(strategy=family_strategies(model.inverter.topology, model.controller.strategy)[0])
     lib = topo.host_library(base, topo.derive(base), with_sim=True)
     variants = {name: with_integrator(base, name) for name in Plant.INTEGRATORS}
     best = {name: 0.0 for name in variants}

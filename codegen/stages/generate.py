@@ -38,7 +38,7 @@ def generate(model: Model, outdir: Path, log: Log = print, analysis: dict[str, A
     generating several targets computes it once); computed here when None."""
     topo = topology_of(model)
     c = model.controller
-    log(f"deriving the {topo.title} tables for {model.name} ({c.strategy}, tables {c.tables})")
+    log(f"deriving the {topo.name} tables for {model.name} (controller.strategy {c.strategy})")
     tables = topo.derive(model)
     files = sources(model, model.target, tables)
     hashes = manifest(files)

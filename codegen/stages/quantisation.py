@@ -38,6 +38,7 @@ from typing import Any
 
 import numpy as np
 
+from codegen.config import family_strategies
 from codegen.errors import UsageError
 from codegen.kernels.trig import sincos_constants
 from codegen.model import Model
@@ -233,14 +234,14 @@ def analyse(model: Model, strategies: list[str] | None = None, random_states: in
             max_closed_loop: int | None = None, log: Log = lambda s: None,
             traces: Path | None = None) -> dict[str, Any]:
     """The quantisation analysis (module doc, a-d) of the fixed-point ``model`` for ``strategies``
-    (default: every strategy of its topology).  ``max_closed_loop``: at most this many of the recorded
+    (default: every strategy of the family of its strategy).  ``max_closed_loop``: at most this many of the recorded
     closed-loop states (evenly spaced); ``traces``: directory the closed-loop
     runs' time series are written to (``fixed.npz``, ``float32.npz``).  JSON-ready dict."""
     if not number_format(model.controller.number_format).quantised:
         raise UsageError(f"the quantisation report is about fixed point; {model.source} has "
                          f"controller.number_format = {model.controller.number_format!r} (use --number-format fixed)")
     topo = topology_of(model)
-    chosen = list(strategies or topo.strategies)
+    chosen = list(strategies or family_strategies(model.inverter.topology, model.controller.strategy))
     per: dict[str, Any] = {}
     for s in chosen:
         m_fx = model.with_controller(strategy=s)

@@ -46,15 +46,16 @@ def _spaced(x: np.ndarray, n: int) -> np.ndarray:
 
 
 def record_controller(name: str) -> None:
-    from codegen.config import load_config
+    from codegen.config import family_strategies, load_config
     from codegen.stages.training import with_trained_tables
     from codegen.topology import topology_of
 
     base = load_config(ROOT / "examples" / f"{name}.toml")
     topo = topology_of(base)
-    base = with_trained_tables(base, topo.strategies)  # s2/s3: the tables trained on the example's scenario
+    family = family_strategies(base.inverter.topology, base.controller.strategy)  # the example's own family
+    base = with_trained_tables(base, family)  # s2/s3: the tables trained on the example's scenario
     arrays: dict[str, np.ndarray] = {}
-    for s in topo.strategies:
+    for s in family:
         m = base.with_controller(strategy=s)
         t = topo.derive(m)
         lib = topo.host_library(m, t, with_sim=True)

@@ -14,9 +14,12 @@ import numpy as np
 from codegen.errors import Unsupported
 from codegen.hostbuild import HostLib
 from codegen.model import Model
+from codegen.mpcc.states import adversarial
+from codegen.mpcc.tables import MpccTables
 from codegen.records import Record
 from codegen.teststates import in_format
 from codegen.topologies.ttype import fwstates, paper, scenarios, section, sim
+from codegen.topologies.ttype import mpcc as mpcc_step
 from codegen.topologies.ttype import reference as ref
 from codegen.topologies.ttype import report as report_md
 from codegen.topologies.ttype import states as test_states
@@ -27,6 +30,7 @@ from codegen.topologies.ttype.modulator import render_modulator
 from codegen.topologies.ttype.records import INPUT
 from codegen.topologies.ttype.records import output_record as _output_record
 from codegen.topologies.ttype.render import render_three_level
+from codegen.topologies.ttype.vectors import N_STATES
 from codegen.topology import Log, Progress, Trajectory, record_trajectory
 
 name = "t-type"
@@ -38,24 +42,60 @@ trajectory_doc = "states evenly spaced over the 27-MPDTC run at rated speed and 
 #: steady speeds whose closed-loop states join verification (the paper's Table 5: 300, 1800, 3000 r/min)
 VERIFY_SPEEDS_RPM = (300.0, 1800.0, 3000.0)
 
-report = report_md.report_text
-step_batch = ref.step_batch
-selftest_states = fwstates.selftest_states
+#: the tables of either family: the MPDTC's, or the long-horizon family's (``codegen.mpcc``)
+Tables = ThreeLevelTables | MpccTables
 
 
-def render(model: Model, tables: ThreeLevelTables, target: str) -> dict[str, str]:
+def _long(model: Model) -> bool:
+    """The config's strategy is of the long-horizon family (``mpcc``)."""
+    return section.family(model.controller.strategy) == section.MPCC
+
+
+def report(model: Model, tables: Tables, target: str) -> str:
+    if isinstance(tables, MpccTables):
+        from codegen.mpcc.report import report_text
+
+        return report_text(model, tables, target, "T-type three-level")
+    return report_md.report_text(model, tables, target)
+
+
+def step_batch(tables: Tables, states: np.ndarray) -> np.ndarray:
+    if isinstance(tables, MpccTables):
+        return mpcc_step.step_batch(tables, states)
+    return ref.step_batch(tables, states)
+
+
+def selftest_states(model: Model, tables: Tables, n: int, seed: int) -> np.ndarray:
+    if isinstance(tables, MpccTables):
+        return random_states(model, tables, n, seed)
+    return fwstates.selftest_states(model, tables, n, seed)
+
+
+def _modulator_tables(model: Model) -> ThreeLevelTables:
+    """The MPDTC tables whose 7-segment sequences the modulator assumes (a long-horizon decision is one
+    basic state, the sequence of its own: the modulator serves it unchanged)."""
+    return derive_three_level(model.with_controller(strategy=section.families[section.MPDTC][0]))
+
+
+def render(model: Model, tables: Tables, target: str) -> dict[str, str]:
     """The step (``render``) and, for a target that drives a power stage, its modulator and example
     interrupt routine (``modulator``: 7-segment sequence -> 12 gates on TIM1/TIM8 or ePWM1..6,
     docs/modulator.md)."""
+    if isinstance(tables, MpccTables):
+        return {**mpcc_step.render(model, tables, target), **render_modulator(model, _modulator_tables(model), target)}
     return {**render_three_level(model, tables, target), **render_modulator(model, tables, target)}
 
 
 def output_record(model: Model) -> Record:
-    """The strategy's output record: ``costs`` and ``cand`` as long as its longest candidate row."""
+    """The strategy's output record: ``costs`` and ``cand`` as long as its longest candidate row (the
+    long-horizon family: its own, for the config's horizon)."""
+    if _long(model):
+        return mpcc_step.output_record(model.controller.horizon)
     return _output_record(max_groups_of(model.controller.strategy))
 
 
-derive = derive_three_level
+def derive(model: Model) -> Tables:
+    return mpcc_step.derive(model) if _long(model) else derive_three_level(model)
 
 
 def needs_training(model: Model) -> bool:
@@ -68,7 +108,9 @@ def train(model: Model, log: Log) -> Model:
     return model
 
 
-def host_library(model: Model, tables: ThreeLevelTables, with_sim: bool = False) -> HostLib:
+def host_library(model: Model, tables: Tables, with_sim: bool = False) -> HostLib:
+    if isinstance(tables, MpccTables):
+        return mpcc_step.host_library(model, tables, with_sim=with_sim)
     return build_three_level_library(model, tables, with_sim=with_sim)
 
 
@@ -80,16 +122,36 @@ def closed_loop_states(model: Model, lib: HostLib) -> np.ndarray:
     return np.concatenate(runs)
 
 
-def adversarial_states(model: Model, tables: ThreeLevelTables, n: int) -> np.ndarray:
+def adversarial_states(model: Model, tables: Tables, n: int) -> np.ndarray:
+    if isinstance(tables, MpccTables):
+        base = _basic_previous(test_states.random_states(model, n, seed=5), 5)
+        x = adversarial(base, test_states.limits(model)[:-2], "prev_vector", N_STATES, tables.nf.angle_guard_rad,
+                        tables.nf.sincos_form.table_n)
+        return in_format(x, input_record.bind(tables.nf))
     return test_states.adversarial_states(model, tables, n_target=n)
 
 
-def random_states(model: Model, tables: ThreeLevelTables, n: int, seed: int) -> np.ndarray:
-    return in_format(test_states.random_states(model, n, seed=seed), input_record.bind(tables.nf))
+def _basic_previous(x: np.ndarray, seed: int) -> np.ndarray:
+    """``x`` with ``prev_vector`` a switching state 0..26 but in one state of 500 (the long-horizon
+    family applies no virtual vector; an id above 26 trips its guard)."""
+    rng = np.random.default_rng(seed)
+    x["prev_vector"] = np.where(rng.random(len(x)) < 0.002, x["prev_vector"], x["prev_vector"] % N_STATES)
+    return x
+
+
+def random_states(model: Model, tables: Tables, n: int, seed: int) -> np.ndarray:
+    x = test_states.random_states(model, n, seed=seed)
+    if isinstance(tables, MpccTables):
+        x = _basic_previous(x, seed)
+    return in_format(x, input_record.bind(tables.nf))
 
 
 def trajectory(model: Model, progress: Progress | None = None) -> Trajectory:
-    """The 27-MPDTC run at rated speed and rated torque."""
+    """The 27-MPDTC run at rated speed and rated torque (a long-horizon config: its own run)."""
+    if _long(model):
+        m = scenarios.steady_model(model, model.motor.rated_speed_rpm)
+        lib = mpcc_step.host_library(m, mpcc_step.derive(m), with_sim=True)
+        return record_trajectory(m, lib, sim.run_closed_loop, sim.controller_inputs, progress)
     base = scenarios.steady_model(model.with_controller(strategy=strategies[0]), model.motor.rated_speed_rpm)
     lib = build_three_level_library(base, derive_three_level(base), with_sim=True)
     return record_trajectory(base, lib, sim.run_closed_loop, sim.controller_inputs, progress)
@@ -132,17 +194,23 @@ closed_loop_trace, period_stepper, firmware_plant = (sim.SIMULATOR.closed_loop_t
                                                      sim.SIMULATOR.firmware_plant)
 
 
-def essential_ops(model: Model, tables: ThreeLevelTables) -> dict[str, dict[str, int]]:
+def essential_ops(model: Model, tables: Tables) -> dict[str, dict[str, int]]:
     """Essential operations per step, per candidate, per member, per virtual member and per
     unclamped T_N (``opcount``): the cycle bound."""
     from codegen.topologies.ttype import opcount
 
+    if isinstance(tables, MpccTables):
+        raise Unsupported(f"{model.source}: the cycle bound of controller.strategy = 'mpcc' is not counted yet "
+                          "(its node count varies per step: docs/mpcc.md \"Node budget\")")
+
     return opcount.essential_ops(tables)
 
 
-def op_multiplicities(model: Model, tables: ThreeLevelTables, states: np.ndarray, expected: np.ndarray) -> dict[str, np.ndarray]:
+def op_multiplicities(model: Model, tables: Tables, states: np.ndarray, expected: np.ndarray) -> dict[str, np.ndarray]:
     """Per state, how often each unit of ``essential_ops`` runs: the output's ``n_eval`` and
     ``n_members``, and the reference's count of virtual members and of unclamped T_N."""
+    if isinstance(tables, MpccTables):
+        raise Unsupported("the cycle bound of controller.strategy = 'mpcc' is not counted yet")
     deadbeat = ref.deadbeat_counts(tables, states)
     return {"per_candidate": expected["n_eval"], "per_member": expected["n_members"],
             "per_virtual_member": deadbeat["virtual"], "per_unclamped": deadbeat["unclamped"]}
@@ -152,4 +220,4 @@ if TYPE_CHECKING:  # mypy checks this module against the protocol it implements
     from codegen.topologies.ttype import plugin as _this
     from codegen.topology import Topology
 
-    _implements: Topology[ThreeLevelTables] = _this
+    _implements: Topology[Tables] = _this

@@ -86,11 +86,16 @@ def load_step_model(model: Model) -> Model:
 
 def _run(model: Model, log: Callable[[str], None], label: str,
          initial_speed_rpm: float = 0.0) -> tuple[Any, float]:
+    from codegen.topologies.ttype import mpcc as mpcc_step
+    from codegen.topologies.ttype import section
     from codegen.topologies.ttype.derive import derive_three_level
     from codegen.topologies.ttype.hostbuild import build_three_level_library
     from codegen.topologies.ttype.sim import run_closed_loop
 
-    lib = build_three_level_library(model, derive_three_level(model), with_sim=True)
+    if section.family(model.controller.strategy) == section.MPCC:
+        lib = mpcc_step.host_library(model, mpcc_step.derive(model), with_sim=True)
+    else:
+        lib = build_three_level_library(model, derive_three_level(model), with_sim=True)
     t0 = time.perf_counter()
     trace = run_closed_loop(lib.ffi, lib.lib, model, progress=lambda f: log(f"  {label} {f:5.0%}"),
                              initial_speed_rpm=initial_speed_rpm)

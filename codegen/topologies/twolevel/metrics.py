@@ -29,7 +29,14 @@ if TYPE_CHECKING:  # pragma: no cover
 def flux_reference_of(trace: Any, model: Model) -> Any:
     """psi* the flux ripple is measured about: ``controller.psi_ref_wb`` (constant), or for
     ``controller.psi_ref = "mtpa"`` the float64 MTPA flux of each sample's T* (the step interpolates
-    the same curve from a table, within 5e-5 Wb: docs/algorithms.md "Flux reference")."""
+    the same curve from a table, within 5e-5 Wb: docs/algorithms.md "Flux reference"); the long-horizon
+    family (no flux reference): the flux of its current reference, sqrt(psi_f^2 + (L i_q*)^2)."""
+    from codegen.topologies.twolevel import section
+
+    if section.family(model.controller.strategy) == section.MPCC:  # the flux of the current reference
+        m = model.motor
+        iq = np.asarray(trace.torque_ref_nm, np.float64) / (1.5 * m.pole_pairs * m.psi_f_wb)
+        return np.sqrt(m.psi_f_wb ** 2 + (m.ld_h * iq) ** 2)
     if model.controller.psi_ref == "mtpa":
         return mtpa_flux(model.motor, np.asarray(trace.torque_ref_nm, np.float64))
     return float(model.controller.psi_ref_wb)

@@ -17,11 +17,15 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from codegen.errors import Unsupported
 from codegen.hostbuild import HostLib
 from codegen.model import Model
+from codegen.mpcc.states import adversarial
+from codegen.mpcc.tables import MpccTables
 from codegen.records import Record
 from codegen.teststates import in_format
 from codegen.topologies.twolevel import fwstates, paper, scenarios, section, sim, switch_tables, tables_file
+from codegen.topologies.twolevel import mpcc as mpcc_step
 from codegen.topologies.twolevel import reference as ref
 from codegen.topologies.twolevel import report as report_md
 from codegen.topologies.twolevel import states as test_states
@@ -40,25 +44,61 @@ input_record = INPUT
 reference = "codegen.topologies.twolevel.reference.step_batch"
 trajectory_doc = "states evenly spaced over the conventional controller's closed-loop run of the scenario"
 
-derive = switch_tables.tables_for
-needs_training = switch_tables.needs_training
-report = report_md.report_text
-step_batch = ref.step_batch
-selftest_states = fwstates.selftest_states
+#: the tables of either family: the MPTC's, or the long-horizon family's (``codegen.mpcc``)
+Tables = TwoLevelTables | MpccTables
+
+
+def _long(model: Model) -> bool:
+    """The config's strategy is of the long-horizon family (``mpcc``)."""
+    return section.family(model.controller.strategy) == section.MPCC
+
+
+def needs_training(model: Model) -> bool:
+    return not _long(model) and switch_tables.needs_training(model)
+
+
+def derive(model: Model) -> Tables:
+    return mpcc_step.derive(model) if _long(model) else switch_tables.tables_for(model)
+
+
+def report(model: Model, tables: Tables, target: str) -> str:
+    if isinstance(tables, MpccTables):
+        from codegen.mpcc.report import report_text
+
+        return report_text(model, tables, target, title)
+    return report_md.report_text(model, tables, target)
+
+
+def step_batch(tables: Tables, states: np.ndarray) -> np.ndarray:
+    if isinstance(tables, MpccTables):
+        return mpcc_step.step_batch(tables, states)
+    return ref.step_batch(tables, states)
+
+
+def selftest_states(model: Model, tables: Tables, n: int, seed: int) -> np.ndarray:
+    if isinstance(tables, MpccTables):
+        return random_states(model, tables, n, seed)
+    return fwstates.selftest_states(model, tables, n, seed)
 
 
 def output_record(model: Model) -> Record:
-    """The output record (the same for every two-level strategy: 7 candidate slots)."""
-    return OUTPUT
+    """The output record: the MPTC's (the same for every MPTC strategy: 7 candidate slots), or the
+    long-horizon family's for the config's horizon."""
+    return mpcc_step.output_record(model.controller.horizon) if _long(model) else OUTPUT
 
 
-def render(model: Model, tables: TwoLevelTables, target: str) -> dict[str, str]:
+def render(model: Model, tables: Tables, target: str) -> dict[str, str]:
     """The step (``render``) and, for a target that drives a power stage, its modulator and example
-    interrupt routine (``modulator``: switching state -> TIM1 / ePWM1..3 compares, docs/modulator.md)."""
-    return {**render_two_level(model, tables, target), **render_modulator(model, tables, target)}
+    interrupt routine (``modulator``: switching state -> TIM1 / ePWM1..3 compares, docs/modulator.md;
+    the long-horizon step's decision is the same ``sw``)."""
+    step = mpcc_step.render(model, tables, target) if isinstance(tables, MpccTables) \
+        else render_two_level(model, tables, target)
+    return {**step, **render_modulator(model, tables, target)}  # type: ignore[arg-type]
 
 
-def host_library(model: Model, tables: TwoLevelTables, with_sim: bool = False) -> HostLib:
+def host_library(model: Model, tables: Tables, with_sim: bool = False) -> HostLib:
+    if isinstance(tables, MpccTables):
+        return mpcc_step.host_library(model, tables, with_sim=with_sim)
     return build_host_library(model, tables, with_sim=with_sim)
 
 
@@ -66,16 +106,25 @@ def closed_loop_states(model: Model, lib: HostLib) -> np.ndarray:
     return sim.controller_inputs(sim.run_closed_loop(lib.ffi, lib.lib, model), model, lib.records.input.nf)
 
 
-def adversarial_states(model: Model, tables: TwoLevelTables, n: int) -> np.ndarray:
+def adversarial_states(model: Model, tables: Tables, n: int) -> np.ndarray:
+    if isinstance(tables, MpccTables):
+        base = test_states.random_states(model, n, seed=5)
+        x = adversarial(base, test_states.limits(model), "prev_sw", 8, tables.nf.angle_guard_rad,
+                        tables.nf.sincos_form.table_n)
+        return in_format(x, input_record.bind(tables.nf))
     return test_states.adversarial_states(model, tables, ref.step_batch, n_target=n)
 
 
-def random_states(model: Model, tables: TwoLevelTables, n: int, seed: int) -> np.ndarray:
+def random_states(model: Model, tables: Tables, n: int, seed: int) -> np.ndarray:
     return in_format(test_states.random_states(model, n, seed=seed), input_record.bind(tables.nf))
 
 
 def trajectory(model: Model, progress: Progress | None = None) -> Trajectory:
-    """The conventional controller's closed-loop run of the config's scenario."""
+    """The conventional controller's closed-loop run of the config's scenario (a long-horizon config:
+    its own run)."""
+    if _long(model):
+        lib = mpcc_step.host_library(model, mpcc_step.derive(model), with_sim=True)
+        return record_trajectory(model, lib, sim.run_closed_loop, sim.controller_inputs, progress)
     base = model.with_controller(strategy=strategies[0])
     lib = build_host_library(base, switch_tables.tables_for(base), with_sim=True)
     return record_trajectory(base, lib, sim.run_closed_loop, sim.controller_inputs, progress)
@@ -131,14 +180,18 @@ closed_loop_trace, period_stepper, firmware_plant = (sim.SIMULATOR.closed_loop_t
                                                      sim.SIMULATOR.firmware_plant)
 
 
-def essential_ops(model: Model, tables: TwoLevelTables) -> dict[str, dict[str, int]]:
+def essential_ops(model: Model, tables: Tables) -> dict[str, dict[str, int]]:
     """Essential operations per step and per candidate (``opcount``): the cycle bound."""
     from codegen.topologies.twolevel import opcount
+
+    if isinstance(tables, MpccTables):
+        raise Unsupported(f"{model.source}: the cycle bound of controller.strategy = 'mpcc' is not counted yet "
+                          "(its node count varies per step: docs/mpcc.md \"Node budget\")")
 
     return opcount.essential_ops(tables)
 
 
-def op_multiplicities(model: Model, tables: TwoLevelTables, states: np.ndarray, expected: np.ndarray) -> dict[str, np.ndarray]:
+def op_multiplicities(model: Model, tables: Tables, states: np.ndarray, expected: np.ndarray) -> dict[str, np.ndarray]:
     """Per state, how often each unit of ``essential_ops`` runs: the output's ``n_eval`` candidates."""
     return {"per_candidate": expected["n_eval"]}
 
@@ -147,4 +200,4 @@ if TYPE_CHECKING:  # mypy checks this module against the protocol it implements
     from codegen.topologies.twolevel import plugin as _this
     from codegen.topology import Topology
 
-    _implements: Topology[TwoLevelTables] = _this
+    _implements: Topology[Tables] = _this

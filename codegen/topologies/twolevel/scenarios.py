@@ -30,10 +30,14 @@ from codegen.topologies.twolevel.switch_tables import tables_for
 
 def run_variant(model: Model, log: Callable[[str], None]) -> tuple[Any, float]:
     """Build and run one strategy variant; returns (trace, wall_s)."""
+    from codegen.topologies.twolevel import mpcc as mpcc_step
+    from codegen.topologies.twolevel import section
     from codegen.topologies.twolevel.sim import run_closed_loop
 
-    t = tables_for(model)
-    lib = build_host_library(model, t, with_sim=True)
+    if section.family(model.controller.strategy) == section.MPCC:
+        lib = mpcc_step.host_library(model, mpcc_step.derive(model), with_sim=True)
+    else:
+        lib = build_host_library(model, tables_for(model), with_sim=True)
     s = model.controller.strategy
     t0 = time.perf_counter()
     trace = run_closed_loop(lib.ffi, lib.lib, model, progress=lambda f: log(f"  {s:12s} {f:5.0%}"))

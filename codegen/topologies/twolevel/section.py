@@ -10,19 +10,28 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
+from dataclasses import replace
 from typing import NoReturn
 
 from codegen.config import INT, PATH, Ref, Spec, choice_spec, closed, closed_open, open_closed, real_spec
 from codegen.model import COST_FORMS, PSI_REFS, Model
+from codegen.mpcc import spec as mpcc_spec
 from codegen.operating import Finding, g4
 
-__all__ = ["strategies", "fields", "narrowed", "check", "operating_findings", "resolve"]
+__all__ = ["strategies", "families", "fields", "narrowed", "check", "operating_findings", "resolve"]
+
+#: the MPTC strategies of seed 001 (torque and flux in the cost, one period)
+MPTC = "mptc"
+#: long-horizon current control with a sphere decoder (codegen.mpcc, docs/mpcc.md)
+MPCC = "mpcc"
+
+#: strategy family -> its strategies, in report order; the first of each is its baseline
+families: dict[str, tuple[str, ...]] = {MPTC: ("conventional", "s1", "s2", "s3"), MPCC: ("mpcc",)}
 
 #: every strategy, in report order; the first is the baseline the others are compared to
-strategies: tuple[str, ...] = ("conventional", "s1", "s2", "s3")
+strategies: tuple[str, ...] = families[MPTC] + families[MPCC]
 
-#: the two-level controller's own fields (mptc-two-level: predictor, tables, flux reference, cost)
-fields: dict[str, Spec] = {
+_mptc_fields: dict[str, Spec] = {
     "controller.predictor": choice_spec(("flux-geometry", "dq-euler"), required=True),
     "controller.tables": choice_spec(("derived", "published"), required=True),
     "controller.tables_file": Spec(PATH),
@@ -35,12 +44,25 @@ fields: dict[str, Spec] = {
     "controller.derivation.max_active": Spec(INT, closed(1, 6)),
 }
 
+#: the two-level controller's own fields: the MPTC's (mptc-two-level: predictor, tables, flux reference,
+#: cost), read only by its strategies, and the long-horizon family's
+fields: dict[str, Spec] = {**{k: replace(v, families=(MPTC,)) for k, v in _mptc_fields.items()},
+                           **mpcc_spec.fields(MPCC)}
+
+
+def family(strategy: object) -> str:
+    """The family of ``strategy`` (MPTC for anything else: the strategy's own check reports it)."""
+    return MPCC if strategy in families[MPCC] else MPTC
+
 #: common fields whose allowed values the two-level narrows (none)
 narrowed: dict[str, Spec] = {}
 
 
 def check(values: Mapping[str, object], fail: Callable[[str, object, str], NoReturn]) -> None:
     """Consistency between the two-level fields (after every field passed its own check)."""
+    if family(values["controller.strategy"]) == MPCC:
+        mpcc_spec.check(values, fail)
+        return
     if values["controller.predictor"] == "flux-geometry" and values["motor.ld_h"] != values["motor.lq_h"]:
         fail("controller.predictor", values["controller.predictor"],
              'flux-geometry predictor needs Ld == Lq (surface PMSM); use predictor = "dq-euler" '
@@ -57,6 +79,8 @@ def operating_findings(model: Model) -> list[Finding]:
     MTPA flux of one torque at most and the reluctance torque goes unused (``controller.psi_ref =
     "mtpa"`` follows T*).  A surface motor (Ld == Lq) gets none: it has no reluctance torque."""
     m, c = model.motor, model.controller
+    if family(c.strategy) == MPCC:  # no flux reference, no torque term: nothing of the MPTC's applies
+        return []
     w_e = m.rated_speed_rpm * 2.0 * math.pi / 60.0 * m.pole_pairs
     v_six_step = 2.0 * model.inverter.udc_v / math.pi
     v_flux = w_e * c.psi_ref_wb
@@ -105,6 +129,8 @@ def _current_step_findings(model: Model) -> list[Finding]:
 def resolve(model: Model) -> Model:
     """The model with the trained s2/s3 tables its ``controller.tables_file`` names read in (the file is
     read and checked against the config; no compiler, no run)."""
+    if family(model.controller.strategy) == MPCC:
+        return model
     from codegen.topologies.twolevel.tables_file import load_into
 
     return load_into(model)
