@@ -291,14 +291,17 @@ def cmd_tables(args: argparse.Namespace) -> int:
 
 # ---------------------------------------------------------------- bench
 def cmd_bench(args: argparse.Namespace) -> int:
-    from codegen.stages.bench import bench
+    from codegen.stages.bench import BENCH_BOARDS, bench
 
     model = load_model(args)
     cliargs.at_least("--repeats", args.repeats, 1)
     cliargs.output_file("--json", args.json)
     strategies, log = _strategies(args, model), progress_log(args.quiet)
     model = with_trained_tables(model, strategies, log)
-    data = bench(model, strategies, emulated=args.emulated, repeats=args.repeats, log=log)
+    if args.board is not None and not args.emulated:
+        raise UsageError(f"--board = {args.board}: the board of --emulated; add --emulated")
+    data = bench(model, strategies, emulated=args.emulated, repeats=args.repeats, log=log,
+                 board=args.board or BENCH_BOARDS[0])
     print(data.pop("_table"))
     write_json(args.json, data)
     return EXIT_OK
@@ -429,6 +432,10 @@ def _bench_args(b: argparse.ArgumentParser) -> None:
     add_config_args(b)
     b.add_argument("--strategies", help="comma list (default: all of the topology)")
     b.add_argument("--emulated", action="store_true", help="instructions per step on the emulated Cortex-M7 (QEMU)")
+    b.add_argument("--board", choices=("qemu-m7", "qemu-m3"),
+                   help="the emulated board of --emulated: qemu-m7 (default; Cortex-M7 with FPU, cycle estimate) "
+                        "or qemu-m3 (Cortex-M3 without FPU: fixed point against float32 in soft float, every "
+                        "strategy, and the M7's fixed/float32 ratio)")
     b.add_argument("--repeats", type=int, default=5, help="timing repeats, best kept (default 5)")
     b.add_argument("--json", help="write results as JSON")
 

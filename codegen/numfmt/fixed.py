@@ -7,20 +7,28 @@ operation serves every unit.  Each operation has one defined rounding and
 saturates to int32 (numerics.md "Fixed-point path"):
 
 =========  ==============================================================
-add, sub   ``sat(a +- b)`` (int64 sum)
+add, sub   ``sat(a +- b)``
 neg, abs   ``sat(-a)``, ``sat(|a|)`` (``-INT32_MIN`` saturates)
 mul        ``sat(floor((a*b + 2^(G-1)) / 2^G))``: round half up
 div        ``sat(floor((a*2^G)/b + 1/2))``, sign of ``b`` folded into the
            numerator; ``b == 0`` gives 0 (the step never divides by 0)
-sqrt       ``floor(sqrt(a * 2^G))`` exactly (``a <= 0`` gives 0)
+sqrt       ``floor(sqrt(a * 2^G))`` exactly (``a <= 0`` gives 0), by the C's CLZ-seeded
+           Newton steps (:func:`isqrt_q`)
 trunc_int  ``a / 2^G`` truncated toward zero (C's integer division)
 from_int   ``sat(n * 2^G)``
 =========  ==============================================================
 
 ``FixedOps`` models each with numpy int64, exactly; the C spelling is
-``templates/numfmt/fixed.j2`` (small helper functions with no undefined or
-implementation-defined behaviour: no signed overflow, no shift of a
-negative value).
+``templates/numfmt/fixed.j2``: small helper functions on 32-bit operations
+(a sum with an overflow test, a product as one 32x32->64 multiply and a
+shift of its two words, a quotient and a square root by 32-bit divisions:
+no 64-bit run-time routine on a 32-bit core), with no undefined or
+implementation-defined behaviour (no signed overflow, no shift of a
+negative value, no out-of-range conversion to a signed type).  The square
+root is the one operation whose C steps the reference repeats
+(:func:`isqrt_q`); the others are defined by their results, which the C
+reaches by other means (tests/numfmt/test_fixed_fast.py checks them bit for
+bit).
 
 :func:`count_saturations` records, while it is active, which lanes each
 saturating operation saturated, per call site of the reference (the
@@ -41,7 +49,8 @@ from .lanes import LaneOps
 from .scaling import INT32_MAX, INT32_MIN, BaseRanges, Scaling, Signal, choose_scaling
 from .trigform import SinCosForm
 
-__all__ = ["FixedOps", "Fixed", "FIXED", "isqrt64", "SaturationCount", "count_saturations"]
+__all__ = ["FixedOps", "Fixed", "FIXED", "isqrt64", "isqrt32_newton", "isqrt_q", "clz32", "SaturationCount",
+           "count_saturations"]
 
 
 class SaturationCount:
@@ -133,6 +142,44 @@ def isqrt64(x: Any) -> np.ndarray:
     return r
 
 
+def clz32(x: Any) -> np.ndarray:
+    """Leading zero bits of uint32 values 1 <= x < 2^32 (C ``__builtin_clz``), exactly: the binary
+    exponent of x as a float64 (exact below 2^53)."""
+    _, e = np.frexp(np.asarray(x, np.int64).astype(np.float64))
+    return (32 - e).astype(np.int64)
+
+
+def isqrt32_newton(an: Any) -> np.ndarray:
+    """floor(sqrt(an)) of 2^30 <= an < 2^32 by the C's ``q_isqrt32``: the tangent of sqrt at 2^31 as the
+    seed, two Newton steps, the result capped at 2^16 - 1 and corrected once (exact: checked
+    over the whole range, tests/numfmt/test_fixed_fast.py)."""
+    an = _i64(an)
+    y = (((an >> 16) * 46341) >> 16) + 23171
+    y = (y + an // y) >> 1
+    y = (y + an // y) >> 1
+    y = np.minimum(y, 0xFFFF)
+    return np.where(y * y > an, y - 1, y)
+
+
+def isqrt_q(a: Any, g: int) -> np.ndarray:
+    """floor(sqrt(a * 2^g)) of int32 counts ``a`` (0 for a <= 0), 8 <= g <= 30, by the C's ``q_sqrt``:
+    a 2^g scaled by an even power of two 2^k to an * 2^30 with 2^30 <= an < 2^32 (k from the CLZ of
+    a), s = floor(sqrt(an)), one Newton step on an * 2^30 from s * 2^15, shifted back by k/2 and
+    corrected once.  Exact floor(sqrt) for every int32 (the Newton step from below the root lands on
+    the floor or one above it)."""
+    a = _i64(a)
+    pos = a > 0
+    a1 = np.where(pos, a, 1)
+    m = clz32(a1)
+    m = m - ((m ^ g) & 1)
+    an = a1 << m
+    s = isqrt32_newton(an)
+    t = (s << 15) + (((an - s * s) << 14) // s)
+    t = t >> ((m + 30 - g) >> 1)
+    t = np.where(t * t > (a1 << g), t - 1, t)
+    return np.where(pos, t, 0)
+
+
 class FixedOps(LaneOps):
     """The reference's arithmetic in the fixed-point format: numpy int64, saturated to int32."""
 
@@ -173,8 +220,7 @@ class FixedOps(LaneOps):
         return _sat(np.abs(_i64(a)), "abs")
 
     def sqrt(self, a: Any) -> np.ndarray:
-        a = _i64(a)
-        return _sat(np.where(a > 0, isqrt64(np.maximum(a, 0) << self.g), 0), "sqrt")
+        return _sat(isqrt_q(a, self.g), "sqrt")
 
     def trunc_int(self, a: Any) -> np.ndarray:
         a = _i64(a)

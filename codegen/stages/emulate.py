@@ -262,11 +262,19 @@ class StrategyCounts:
     instr_mean: float
     digests_match: bool
     uart: str = ""
+    #: the self-test set's instructions per step: its state count and min/median/max/mean (median
+    #: None unless the image printed every state's count: ``run_and_check(dump_selftest=True)``)
+    selftest_states: int = 0
+    selftest_min: float = 0.0
+    selftest_median: float | None = None
+    selftest_max: float = 0.0
+    selftest_mean: float = 0.0
 
 
 def run_and_check(model: Model, tables: Any, workdir: Path, *, n_selftest: int = 10000,
                   n_bench: int = N_BENCH, icount_shift: int = ICOUNT_SHIFT, timeout_s: float = 300.0,
-                  log: Callable[[str], None] | None = None, board: str = EMULATED_BOARD) -> StrategyCounts:
+                  log: Callable[[str], None] | None = None, board: str = EMULATED_BOARD,
+                  dump_selftest: bool = False) -> StrategyCounts:
     """Write, build and run one image of the emulated ``board`` (qemu-m7; qemu-m3: no FPU); check it
     against the reference; count instructions.
 
@@ -277,14 +285,16 @@ def run_and_check(model: Model, tables: Any, workdir: Path, *, n_selftest: int =
     ``model.inverter.topology``); the bench set is the topology's recorded
     trajectory (three-level: the 27-MPDTC run at rated speed).  ``log``: progress lines of each
     phase (writing, building, the QEMU run, the digest check), with a heartbeat every few seconds
-    (:func:`codegen.stages.progress.phase`).
+    (:func:`codegen.stages.progress.phase`).  ``dump_selftest``: the image also prints every self-test
+    state's count, which gives the self-test set's median (its min/max/mean come from its SUMMARY either way).
     """
     inp, out = layouts(model)
     workdir = Path(workdir)
     label = f"{tables.strategy} ({model.controller.number_format})"
     with phase(log, f"{label}: writing the firmware project (reference outputs of {n_selftest} self-test "
                     f"and {n_bench} bench states)"):
-        write_firmware_project(model, tables, board, workdir, n_selftest, n_bench=n_bench)
+        write_firmware_project(model, tables, board, workdir, n_selftest, n_bench=n_bench,
+                               dump_selftest=dump_selftest)
     # a clean project whose every build input is unchanged gets the cached build (a "reused" line)
     with phase(log, f"{label}: compiling and linking the image (make)", probe=lambda: build_progress(workdir)):
         build = build_firmware(workdir, board, log=log)
@@ -306,8 +316,19 @@ def run_and_check(model: Model, tables: Any, workdir: Path, *, n_selftest: int =
                    and got.crc_out == out.crc(ts.expected))
     bench = rep.sets.get("bench")
     instr = ticks_to_instructions(bench.cycles if bench else [0], icount_shift)
+    st = rep.sets["selftest"]
+    st_min, st_max, st_mean = (round(float(ticks_to_instructions(v, icount_shift)), 1)
+                               for v in (st.cyc_min, st.cyc_max, st.cyc_mean))
+    st_median = None
+    if dump_selftest:
+        if len(st.cycles) != st.n:
+            raise EmulationError(f"the image printed {len(st.cycles)} self-test counts for {st.n} states")
+        per_state = ticks_to_instructions(st.cycles, icount_shift)
+        st_median = round(float(np.median(per_state)), 1)
+        # the mean of the printed counts (the SUMMARY's mean is an integer number of ticks)
+        st_mean = round(float(per_state.mean()), 1)
     return StrategyCounts(tables.strategy, sum(s.n for s in rep.sets.values()),
                           sum(s.mismatches for s in rep.sets.values()), len(instr),
                           round(float(instr.min()), 1), round(float(np.median(instr)), 1),
                           round(float(instr.max()), 1), round(float(instr.mean()), 1),
-                          ok and run.returncode == 0, run.uart)
+                          ok and run.returncode == 0, run.uart, st.n, st_min, st_median, st_max, st_mean)

@@ -229,13 +229,14 @@ class TestSet:
 
 
 def make_test_sets(model: Model, t: Any, n_selftest: int, n_bench: int,
-                   seed: int = SELFTEST_SEED) -> list[TestSet]:
-    """The self-test set and (if n_bench > 0) the bench trajectory, with reference outputs."""
+                   seed: int = SELFTEST_SEED, dump_selftest: bool = False) -> list[TestSet]:
+    """The self-test set and (if n_bench > 0) the bench trajectory, with reference outputs
+    (``dump_selftest``: the image prints the self-test set's per-state cycles too, as the bench set's)."""
     topo = topology_of(model)
     inp, out = layouts(model)
     x = selftest_states(model, t, n_selftest, seed)
     sets = [TestSet("selftest", f"{len(x)} guard and random states (seed {seed})", x,
-                    expected_outputs(topo, t, x), False, inp, out)]
+                    expected_outputs(topo, t, x), dump_selftest, inp, out)]
     if n_bench > 0:
         b = in_step_format(model, t, trajectory_states(model, n_bench))
         sets.append(TestSet("bench", f"{len(b)} {topo.trajectory_doc}", b, expected_outputs(topo, t, b),
@@ -304,7 +305,8 @@ def _sources(board: Board, outdir: Path, prefix: str, protocol: ProtocolBuild | 
 
 def write_firmware_project(model: Model, tables: Any, board: str, outdir: Path,
                            n_selftest: int = 10000, *, n_bench: int = N_BENCH,
-                           seed: int = SELFTEST_SEED, protocol: ProtocolBuild | None = None) -> list[Path]:
+                           seed: int = SELFTEST_SEED, protocol: ProtocolBuild | None = None,
+                           dump_selftest: bool = False) -> list[Path]:
     """Write a buildable firmware project for ``board`` into ``outdir``; return the files written.
 
     The controller is rendered with the board's target profile, the
@@ -314,7 +316,8 @@ def write_firmware_project(model: Model, tables: Any, board: str, outdir: Path,
     Either topology: ``model.inverter.topology`` picks the controller, the
     records, the reference and the test states (``codegen.fwdata.Topology``);
     ``tables`` are TwoLevelTables or ThreeLevelTables to match.  ``protocol``:
-    a serial protocol build (see the module docstring).
+    a serial protocol build (see the module docstring).  ``dump_selftest``: the image prints every
+    self-test state's cycles (CYC lines), as it does the bench set's.
     """
     spec = board_spec(board)
     topo = topology_of(model)
@@ -323,7 +326,7 @@ def write_firmware_project(model: Model, tables: Any, board: str, outdir: Path,
     outdir = Path(outdir)
     inp, out = layouts(model)
     input_values, output_values = value_table(inp), value_table(out)  # refused before any work
-    sets = make_test_sets(model, tables, n_selftest, n_bench, seed)
+    sets = make_test_sets(model, tables, n_selftest, n_bench, seed, dump_selftest)
     _fit_budget(spec, sets)
     fw = firmware_dir()
     files: dict[str, str] = {f"gen/{k}": v for k, v in topo.render(model, tables, spec.profile).items()}

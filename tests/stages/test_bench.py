@@ -102,3 +102,49 @@ def test_every_number_format_replays_the_same_states():
     assert len(a) == len(b) == N_BENCH and np.isfinite(a["ia_a"]).all()
     for name in a.dtype.names:  # field by field, bit for bit (the records' padding is not data)
         assert a[name].tobytes() == b[name].tobytes(), name
+
+
+@pytest.mark.slow
+def test_emulated_bench_without_fpu(tmp_path, capsys):
+    """``--board qemu-m3``: every strategy in fixed point and in float32 compiled for soft float on the
+    Cortex-M3 (no FPU), both bit-exact on the board (else bench fails); fixed point the faster there by
+    the ratio float32/fixed, the Cortex-M7's fixed/float32 beside it, each image named by its C hash."""
+    require_tool("qemu-system-arm", "qemu-system-arm")
+    require_tool("arm-none-eabi-gcc", "gcc-arm-none-eabi")
+    js = tmp_path / "benchm3.json"
+    assert main(["bench", str(SPMSM), "--emulated", "--board", "qemu-m3", "--json", str(js), "--repeats", "1",
+                 "-q"]) == 0
+    data = json.loads(js.read_text())
+    assert data["board"] == "qemu-m3" and "-mfloat-abi=soft" in data["m3_cpu_flags"]
+    assert data["c_hash_definition"].startswith("sha256 of the lines")
+    assert data["m3_states"] == N_BENCH and data["m3_selftest_states"] == 1000
+    for s in TWO_LEVEL:
+        e = data["strategies"][s]
+        for fmt in ("fixed", "float32"):
+            st = e["m3_by_number_format"][fmt]
+            assert st["states_checked"] == 1000 + N_BENCH and st["bench_states"] == N_BENCH
+            assert 0 < st["min"] <= st["median"] <= st["max"] and st["min"] <= st["mean"] <= st["max"]
+            sf = st["selftest"]
+            assert sf["states"] == 1000 and sf["min"] <= sf["median"] <= sf["max"]
+            assert len(st["c_hash"]) == 64 and st["c_hash_target"] == "host"
+            m7 = e["m7_by_number_format"][fmt]
+            assert m7["median"] > 50 and len(m7["c_hash"]) == 64 and m7["c_hash_target"] == "stm32h743"
+            assert m7["c_hash"] != st["c_hash"]  # another target profile: other C (placement attributes)
+        assert e["m3_instructions_per_step_fixed"] == e["m3_by_number_format"]["fixed"]["median"]
+        # without an FPU, fixed point is the faster, by every measure
+        assert e["m3_float32_over_fixed"] > 1 and e["m3_float32_over_fixed_mean"] > 1
+        assert e["m3_float32_over_fixed_max"] > 1 and e["m3_selftest_float32_over_fixed"] > 1
+        assert e["m3_instructions_per_step_fixed"] < e["m3_instructions_per_step_float32"]
+        assert e["m3_float32_over_fixed"] == (e["m3_instructions_per_step_float32"]
+                                              / e["m3_instructions_per_step_fixed"])
+        # with one, float32 is
+        assert e["m7_fixed_over_float32"] == e["m7_instructions_per_step_fixed"] / e["m7_instructions_per_step_float32"]
+        assert e["m7_fixed_over_float32"] > 1
+    assert data["strategies"]["conventional"]["ratio_to_conventional"] == 1.0
+    out = capsys.readouterr().out
+    assert "M3 fixed instr/step" in out and "float32/fixed" in out and "M7 fx/fl" in out
+
+
+def test_bench_board_needs_emulated(capsys):
+    assert main(["bench", str(SPMSM), "--board", "qemu-m3", "-q"]) == 2
+    assert "--board = qemu-m3: the board of --emulated" in capsys.readouterr().err

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import pytest
 
+import codegen.stages.emulate as emulate
 import codegen.stages.progress as progress
 from codegen.cli import main
 from codegen.stages.emulate import build_progress, uart_progress
@@ -77,6 +78,15 @@ def _bench(tmp_path: Path, capsys: pytest.CaptureFixture[str], *flags: str) -> t
 def test_emulated_bench_reports_every_phase(tmp_path: Path, capsys: pytest.CaptureFixture[str],
                                             monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(progress, "HEARTBEAT_S", 0.1)
+    # a QEMU run of a cached image can end within one heartbeat (since issue 30 the fixed-point step is
+    # about 4 times shorter): each run waits 0.5 s first, so its phase lasts several heartbeats
+    run_qemu = emulate.run_qemu
+
+    def slow_run(*args: object, **kw: object) -> emulate.QemuRun:
+        time.sleep(0.5)
+        return run_qemu(*args, **kw)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(emulate, "run_qemu", slow_run)
     loud, err = _bench(tmp_path, capsys)
     for fmt in ("float32", "fixed"):
         for what in ("writing the firmware project", "compiling and linking the image (make)",
