@@ -1,5 +1,5 @@
-"""``mpcgen`` command line: generate, verify, simulate, tables, bench, firmware, sweep, tune, report, evidence, and
-the commands other packages register (``hil``).
+"""``mpcgen`` command line: generate, verify, simulate, tables, bench, firmware, sweep, tune, study, report,
+evidence, and the commands other packages register (``hil``).
 
 Every command is a :class:`Command`: its name, one-line help, a function adding its options and the
 function that runs it.  codegen's own are :data:`COMMANDS`; another package adds one through the
@@ -384,6 +384,14 @@ def cmd_tune(args: argparse.Namespace) -> int:
     return tune.command(args, model, progress_log(args.quiet), _strategies(args, model), out)
 
 
+# ---------------------------------------------------------------- study
+def cmd_study(args: argparse.Namespace) -> int:
+    from codegen.stages import study
+
+    out = cliargs.output_dir("-o", args.output) if args.output else None
+    return study.command(args, load_model(args), progress_log(args.quiet), out)
+
+
 # ---------------------------------------------------------------- the commands and their options
 def _generate_args(g: argparse.ArgumentParser) -> None:
     add_config_args(g, target=True)
@@ -487,7 +495,8 @@ def _tune_args(t: argparse.ArgumentParser) -> None:
                         "range: 0 .. 2 x the config's value")
     t.add_argument("--objectives", metavar="LIST",
                    help="figures the front trades, minimised (default T_rip_RMSE_nm,psi_rip_RMSE_wb,"
-                        "THD_ia_all_bins_percent; short names T_rip, psi_rip, THD, THD_all, f_ave, Vo, i_peak, Cal)")
+                        "THD_ia_all_bins_percent, and f_ave_hz when controller.lambda_u is tuned; short names "
+                        "T_rip, psi_rip, THD, THD_all, f_ave, Vo, i_peak, Cal)")
     t.add_argument("--grid", type=int, default=None,
                    help="values per field in round 0 (default 9, 5, 4, 3 for 1, 2, 3, more fields)")
     t.add_argument("--rounds", type=int, default=2, help="refinement rounds near the front (default 2)")
@@ -498,6 +507,25 @@ def _tune_args(t: argparse.ArgumentParser) -> None:
     t.add_argument("-o", "--output", metavar="DIR",
                    help="write tune.md, tune.json, tune.csv and front_<a>_<b>.png there (default: the table on "
                         "stdout)")
+
+
+def _study_args(t: argparse.ArgumentParser) -> None:
+    add_config_args(t)
+    t.add_argument("--horizons", default="1-5", metavar="A-B|LIST",
+                   help="the horizons N compared: A-B or a comma list (default 1-5)")
+    t.add_argument("--fsw-khz", dest="fsw_khz", type=float, default=None, metavar="KHZ",
+                   help="the switching frequency every N is matched to (default: f_ave of N = 1 at the config's "
+                        "controller.lambda_u)")
+    t.add_argument("--tolerance", type=float, default=3.0, metavar="PCT",
+                   help="matched when f_ave is within this many percent of the target (default 3)")
+    t.add_argument("--max-runs", dest="max_runs", type=int, default=16,
+                   help="closed-loop runs per N at most while searching lambda_u (default 16)")
+    t.add_argument("--bench", action="append", default=[], metavar="FILE",
+                   help="mpcgen bench --emulated --json output (repeatable): fills the M7 cycles of the N whose "
+                        "config hash it names")
+    _runner_args(t)
+    t.add_argument("-o", "--output", metavar="DIR",
+                   help="write study.md, study.json and study.png there (default: the table on stdout)")
 
 
 def _report_args(r: argparse.ArgumentParser) -> None:
@@ -520,6 +548,8 @@ COMMANDS: tuple[Command, ...] = (
     Command("sweep", "parameter grids and Monte Carlo mismatch studies of simulate, on Dask", _sweep_args, cmd_sweep),
     Command("tune", "cost weights and thresholds from the closed loop: the front, a recommended value, on Dask",
             _tune_args, cmd_tune),
+    Command("study", "long-horizon study: THD, torque ripple and decoder nodes per horizon at a matched "
+                     "switching frequency", _study_args, cmd_study),
     Command("report", "quantisation report of the fixed-point controller (formats, errors, agreement with "
                       "float32, closed loop)", _report_args, cmd_report),
     # defined at the end of this module: looked up when called

@@ -44,7 +44,9 @@ steady window: :func:`codegen.metrics.drive_figures`); the others are marked
 and never recommended.
 
 Front: the points not dominated in the ``--objectives`` (all minimised;
-default torque ripple, flux ripple and the all-bin current THD).
+default torque ripple, flux ripple and the all-bin current THD, and the
+switching frequency when a weight that prices switching is tuned:
+:data:`SWITCHING_WEIGHTS`).
 Recommendation: among the admissible front, the point nearest (Euclidean) to
 the ideal point after scaling each objective to [0, 1] over the admissible
 front (0 its best value there, 1 its worst); ties go to the lowest field
@@ -64,13 +66,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from codegen.config import REAL, all_fields, load_config, owners, schema_for
+from codegen.config import REAL, all_fields, family_of, load_config, owners, schema_for
 from codegen.errors import ConfigError, MpcgenError, UsageError
 from codegen.model import Model
 from codegen.results import metric_sets
 
-__all__ = ["TuneAxis", "Figure", "FIGURES", "DEFAULT_OBJECTIVES", "parse_axis", "parse_objectives", "Search",
-           "evaluate", "dominates", "front", "ranked", "recommend", "command", "MAX_EVALUATIONS"]
+__all__ = ["TuneAxis", "Figure", "FIGURES", "DEFAULT_OBJECTIVES", "SWITCHING_WEIGHTS", "allowed_range", "parse_axis",
+           "parse_objectives", "default_objectives", "Search", "runs_of", "evaluate", "dominates", "front", "ranked",
+           "recommend", "command", "MAX_EVALUATIONS"]
 
 Log = Callable[[str], None]
 
@@ -117,6 +120,10 @@ FIGURES: tuple[Figure, ...] = (
 _BY_NAME = {**{f.key: f for f in FIGURES}, **{f.short: f for f in FIGURES}}
 #: the objectives of the front unless --objectives says otherwise
 DEFAULT_OBJECTIVES = ("T_rip_RMSE_nm", "psi_rip_RMSE_wb", "THD_ia_all_bins_percent")
+#: weights that price switching (docs/mpcc.md eq. (2)): a larger one trades ripple for a lower switching
+#: frequency, so the default objectives add ``f_ave_hz`` when one is tuned (without it every default
+#: objective favours the smallest value and the front is one point at the range's end)
+SWITCHING_WEIGHTS = ("controller.lambda_u",)
 
 
 # ---------------------------------------------------------------- fields
@@ -171,6 +178,16 @@ def _bound(b: Any, values: Mapping[str, object]) -> float:
     return float(b.resolve(values)) if hasattr(b, "resolve") else float(b)
 
 
+def allowed_range(model: Model, name: str) -> tuple[float, float]:
+    """The ends of field ``name``'s allowed interval in ``model``'s config (bounds naming other fields
+    resolved; whether an end is open is the interval's ``describe``)."""
+    iv = schema_for(model.inverter.topology)[name].interval
+    if iv is None:
+        raise ValueError(f"{name} has no interval")
+    values = _Values(model)
+    return _bound(iv.lo, values), _bound(iv.hi, values)
+
+
 def parse_axis(option: str, text: str, model: Model) -> TuneAxis:
     """``SECTION.FIELD`` or ``SECTION.FIELD=LO:HI`` of ``--weight`` / ``--threshold``, checked against the
     field's kind, topology and allowed range (one line naming the field, value and allowed range)."""
@@ -184,6 +201,10 @@ def parse_axis(option: str, text: str, model: Model) -> TuneAxis:
         raise UsageError(f"{option} {name}: not a field of a '{topo}' config (it belongs to inverter.topology = "
                          f"{' or '.join(repr(t) for t in owners(name))}); tuning it would change nothing")
     spec = schema_for(topo)[name]
+    family = family_of(topo, model.controller.strategy)
+    if spec.families and family not in spec.families:
+        raise UsageError(f"{option} {name}: not read by controller.strategy = '{model.controller.strategy}' (only "
+                         f"the {' and '.join(spec.families)} strategies read it); tuning it would change nothing")
     if spec.kind != REAL or spec.interval is None:
         raise UsageError(f"{option} {name}: not a real-valued field; only numbers can be tuned")
     values = _Values(model)
@@ -224,9 +245,17 @@ def parse_axis(option: str, text: str, model: Model) -> TuneAxis:
     return TuneAxis(name, role, lo, hi, nominal)
 
 
-def parse_objectives(text: str | None) -> tuple[Figure, ...]:
-    """The figures of ``--objectives`` (a comma list of keys or short names; default :data:`DEFAULT_OBJECTIVES`)."""
-    names = list(DEFAULT_OBJECTIVES) if text is None else [t.strip() for t in text.split(",") if t.strip()]
+def default_objectives(fields: list[str] | tuple[str, ...] = ()) -> tuple[str, ...]:
+    """The objectives without ``--objectives``: :data:`DEFAULT_OBJECTIVES`, and ``f_ave_hz`` when one of the
+    tuned ``fields`` is a switching weight (:data:`SWITCHING_WEIGHTS`)."""
+    switching = any(f in SWITCHING_WEIGHTS for f in fields)
+    return DEFAULT_OBJECTIVES + (("f_ave_hz",) if switching else ())
+
+
+def parse_objectives(text: str | None, fields: list[str] | tuple[str, ...] = ()) -> tuple[Figure, ...]:
+    """The figures of ``--objectives`` (a comma list of keys or short names; default
+    :func:`default_objectives` of the tuned ``fields``)."""
+    names = list(default_objectives(fields)) if text is None else [t.strip() for t in text.split(",") if t.strip()]
     allowed = ", ".join(f"{f.key} ({f.short})" for f in FIGURES)
     out: list[Figure] = []
     for n in names:
@@ -241,7 +270,7 @@ def parse_objectives(text: str | None) -> tuple[Figure, ...]:
 
 
 # ---------------------------------------------------------------- one evaluated point
-def _runs_of(result: dict[str, Any], strategy: str) -> list[tuple[str, dict[str, Any], dict[str, Any]]]:
+def runs_of(result: dict[str, Any], strategy: str) -> list[tuple[str, dict[str, Any], dict[str, Any]]]:
     """(scenario run, shown entry, main entry) of ``strategy`` in a run's simulate result: a scenario set's
     ``<key>_steady`` entry is shown for ``<key>`` (the figures ``simulate`` prints), the verdict and drive
     figures are the ``<key>`` entry's."""
@@ -273,7 +302,7 @@ def evaluate(result: dict[str, Any], strategy: str) -> dict[str, Any]:
     """The figures of one point of ``strategy`` from its run's simulate ``result``: ``figures``, the
     verdict (``faults``, ``tracking``, ``anomalies``, ``locked_cycle_runs``), ``admissible`` with the
     ``reasons`` it is not, and ``scenario_runs`` (every scalar metric of each scenario run)."""
-    runs = _runs_of(result, strategy)
+    runs = runs_of(result, strategy)
     figures: dict[str, Any] = {}
     for f in FIGURES:
         vals = [(float(sh[f.key] if f.source == "shown" else mn[f.key]), _steady(f, sh, mn))
@@ -530,7 +559,7 @@ def check_args(args: argparse.Namespace, model: Model) -> tuple[list[TuneAxis], 
         if a.field in seen:
             raise UsageError(f"{a.field} is tuned twice (--weight/--threshold); give each field once")
         seen.add(a.field)
-    objectives = parse_objectives(args.objectives)
+    objectives = parse_objectives(args.objectives, [a.field for a in axes])
     grid = default_grid(len(axes)) if args.grid is None else args.grid
     if not 2 <= grid <= 50:
         raise UsageError(f"--grid = {grid}: must be an integer in [2, 50] (values per field in round 0)")
