@@ -218,8 +218,10 @@ class Reporting(Protocol[T_in]):
         """The operations the step's algorithm cannot do without, for ``mpcgen bench``'s cycle bounds:
         ``per_step``, ``per_candidate`` and any further units (``op_multiplicities`` says how often
         each runs), optionally ``first_candidate`` (the first evaluated candidate's, in place of
-        ``per_candidate``), each ``{"fp", "cmp", "sqrt", "div", "load", "store"}`` counts (``fp``: FP
-        operations that write a register; ``cmp``: compares and branches)."""
+        ``per_candidate``), each ``{"add", "mul", "cmp", "sqrt", "div", "load", "store"}`` counts
+        (``mul``: products; ``add``: the other operations that write a value; ``cmp``: compares and
+        branches): operations of the algorithm, which the step's number format turns into instructions
+        (``NumberFormat.op_costs``)."""
         ...
 
     def op_multiplicities(self, model: Model, tables: T_in, states: np.ndarray,

@@ -121,7 +121,7 @@ def test_round_away_is_c99_roundf() -> None:
 @pytest.mark.parametrize("name", CASES)
 def test_the_bound_counts_every_compare_of_the_fast_path(name: str) -> None:
     """guard_ops (the cycle bounds' guard operations) counts one compare per compare the generated
-    fast path makes, plus the branch on their union, and the sum i_a + i_b as an FP operation."""
+    fast path makes, plus the branch on their union, and the sum i_a + i_b as an add."""
     path, overrides, guard = CASES[name]
     m = model_for(path, **overrides)
     topo = topology_of(m)
@@ -132,4 +132,4 @@ def test_the_bound_counts_every_compare_of_the_fast_path(name: str) -> None:
     compares += fast.count("(uint32_t)in->")  # an index's upper limit, an index range test
     ops = guard_ops(guard)
     assert compares == ops["cmp"] - 1
-    assert ops["fp"] == fast.count(" isum = ")  # the sum i_a + i_b (the one FP operation)
+    assert ops["add"] == fast.count(" isum = ")  # the sum i_a + i_b (the one operation writing a value)

@@ -65,10 +65,11 @@ def test_table_and_coefficients_per_format():
     assert table_index_bound(FIXED) == 5  # 8 rad * 4 / (2 pi)
     k = {name: v for name, v, *_ in sincos_constants(FLOAT32)}
     assert abs(k["SIN_S3"] + 1 / 6) < 1e-5 and abs(k["COS_C2"] + 0.5) < 1e-5  # near Taylor: least squares
-    # essential operations of one sin/cos (the cycle bound): 19 float operations and 5 constant loads in
-    # float32 (plus the 2 table loads of each angle)
-    assert sincos_ops(FLOAT32) == (19, 5)
-    assert sincos_ops(FIXED) == (29, 10)
+    # essential operations of one sin/cos (the cycle bound): 19 operations (8 sums and other writes, 11
+    # products) and 5 constant loads in float32 (plus the 2 table loads of each angle)
+    assert sincos_ops(FLOAT32) == ({"add": 8, "mul": 11}, 5)
+    # fixed point: degree-7/8 polynomials, Horner: 3 + 4 products, 2 + 3 sums, x r for sin
+    assert sincos_ops(FIXED) == ({"add": 13, "mul": 16}, 10)
 
 
 def test_fixed_point_quadrant_table_is_exact():

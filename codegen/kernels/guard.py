@@ -144,16 +144,16 @@ def guard_ops(checks: tuple[Check, ...]) -> dict[str, int]:
     """Essential operations of a guard, for the cycle bounds (``Topology.essential_ops``), counted from
     its checks: ``cmp``, one compare per checked field (the absolute values are sign masks inside the
     compares: float32 compares bit patterns); a phase-current check three (|i_a|, |i_b|, |i_c|) and,
-    as ``fp``, the sum i_a + i_b that gives i_c; a range check applied under an index range one
+    as ``add``, the sum i_a + i_b that gives i_c; a range check applied under an index range one
     compare per bound, zero included in the sign test when it has no lower bound, and one for the
     index range; then the one branch on their union (counted with the compares: neither writes a
     register).  Two-level: 9 compares (|i_a|, |i_b|, |i_c|, |theta|, |omega|, |T*|, the DC-link's low
-    and high limits, the state index) and the branch, ``cmp`` 10; the sum, ``fp`` 1."""
-    ops = {"fp": 0, "cmp": 1}  # the branch on the union
+    and high limits, the state index) and the branch, ``cmp`` 10; the sum, ``add`` 1."""
+    ops = {"add": 0, "cmp": 1}  # the branch on the union
     for c in checks:
         if c.kind == "phase_currents":
             ops["cmp"] += 3
-            ops["fp"] += 1
+            ops["add"] += 1
         elif c.kind == "real_in_range_when":
             ops["cmp"] += (1 if c.lo is None else 2) + 1
         else:  # all_at_least, all_at_most, abs_at_most, index_at_most: a compare a field

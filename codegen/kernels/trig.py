@@ -132,17 +132,21 @@ def sincos_table(nf: NumberFormat) -> tuple[Any, ...]:
 
 
 #: essential operations of one generated sin/cos besides its polynomials, for the cycle bound
-#: (``Topology.essential_ops``): y, round, convert, Cody-Waite (4), r^2, 1 + ..., r + ..., the angle
-#: sum (6); loads: 3 constants besides the coefficients, and the two table values
-_SINCOS_FP_BASE, _SINCOS_CONST_LOADS, SINCOS_TABLE_LOADS = 16, 3, 2
+#: (``Topology.essential_ops``): products y, the Cody-Waite pair (2), r^2, the angle sum's four; sums and
+#: other writes round, convert, the Cody-Waite pair (2), 1 + ..., r + ..., the angle sum's two; loads: 3
+#: constants besides the coefficients, and the two table values
+_SINCOS_MUL_BASE, _SINCOS_ADD_BASE, _SINCOS_CONST_LOADS, SINCOS_TABLE_LOADS = 8, 8, 3, 2
 
 
-def sincos_ops(nf: NumberFormat) -> tuple[int, int]:
-    """(float operations, constant loads) of one generated sin/cos in format ``nf`` (the cycle bound);
-    each angle adds ``SINCOS_TABLE_LOADS`` table loads, while angles of one step share the constants."""
+def sincos_ops(nf: NumberFormat) -> tuple[dict[str, int], int]:
+    """(``{"add": sums and other writes, "mul": products}``, constant loads) of one generated sin/cos in
+    format ``nf`` (the cycle bound); each angle adds ``SINCOS_TABLE_LOADS`` table loads, while angles of
+    one step share the constants."""
     f = nf.sincos_form
-    poly = 2 * f.sin_terms + 2 * f.cos_terms - 1  # Horner (n multiplies, n - 1 adds each) and x r for sin
-    return _SINCOS_FP_BASE + poly, _SINCOS_CONST_LOADS + f.sin_terms + f.cos_terms
+    # Horner: n products and n - 1 sums a polynomial of n terms; and x r for sin
+    mul = _SINCOS_MUL_BASE + f.sin_terms + f.cos_terms + 1
+    add = _SINCOS_ADD_BASE + f.sin_terms + f.cos_terms - 2
+    return {"add": add, "mul": mul}, _SINCOS_CONST_LOADS + f.sin_terms + f.cos_terms
 
 
 def _horner(ops: Ops, coeffs: Any, x: Any) -> Any:

@@ -102,6 +102,13 @@ class NumberFormat(Protocol):
         ...
 
     @property
+    def op_costs(self) -> dict[str, dict[str, int]]:
+        """Per essential operation of the algorithm (``add``, ``mul``, ``cmp``, ``sqrt``, ``div``, ``load``,
+        ``store``), the instructions it takes at least in this format, by instruction class
+        (``codegen.numfmt.opcost``): the cycle bound of ``mpcgen bench --emulated``."""
+        ...
+
+    @property
     def scaling(self) -> Any:
         """The step's Q formats (``scaling.Scaling``) of a fixed-point format; None for float32."""
         ...

@@ -46,6 +46,7 @@ from typing import Any
 import numpy as np
 
 from .lanes import LaneOps
+from .opcost import FIXED_OP_COSTS
 from .scaling import INT32_MAX, INT32_MIN, BaseRanges, Scaling, Signal, choose_scaling
 from .trigform import SinCosForm
 
@@ -264,6 +265,12 @@ class Fixed:
     #: sin/cos: the quadrant (table of 4: y = theta 2/pi stays small) and a degree-7/8 polynomial
     sincos_form: SinCosForm = SinCosForm(4, 3, 4)
     _ops: list[Any] = field(default_factory=list, compare=False, repr=False)
+
+    @property
+    def op_costs(self) -> dict[str, dict[str, int]]:
+        """The cycle bound's integer instructions per essential operation: each helper's shortest
+        sequence (``opcost``)."""
+        return FIXED_OP_COSTS
 
     def for_step(self, signals: list[Signal], base: BaseRanges, global_q: int | None) -> Fixed:
         return Fixed(choose_scaling(signals, base, global_q))

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from .lanes import LaneOps
+from .opcost import FLOAT_OP_COSTS
 from .trigform import SinCosForm
 
 __all__ = ["F", "f32", "c_float_literal", "Float32Ops", "Float32", "FLOAT32"]
@@ -138,6 +139,11 @@ class Float32:
     angle_guard_rad: float = 256.0
     #: sin/cos: a 256-entry table and one polynomial term each (|r| <= pi/256)
     sincos_form: SinCosForm = SinCosForm(256, 1, 1)
+
+    @property
+    def op_costs(self) -> dict[str, dict[str, int]]:
+        """The cycle bound's instructions per essential operation: one each (``opcost``)."""
+        return FLOAT_OP_COSTS
 
     def const(self, x: float, unit: str = "") -> np.float32:
         return self.real_dtype.type(x)  # type: ignore[no-any-return]

@@ -49,11 +49,13 @@ import numpy as np
 
 from codegen.errors import MpcgenError
 from codegen.model import Model
+from codegen.numfmt.opcost import INSTRUCTION_CLASSES, OPERATIONS
 from codegen.stages.fwdata import N_BENCH, evenly_spaced
 from codegen.stages.progress import phase
 
 __all__ = ["MCA_ARGS", "CycleEstimate", "CycleError", "Elf", "StepTracer", "check_bound", "estimate_cycles", "mca_cycles",
-           "llvm_mca", "model_bound", "op_totals", "overlap_bound", "strategy_cycles", "METHOD_NOTE"]
+           "llvm_mca", "instruction_totals", "model_bound", "op_totals", "overlap_bound", "strategy_cycles",
+           "METHOD_NOTE"]
 
 #: llvm-mca's target: the board's core (thumbv7em, hard float, Cortex-M7 scheduling model)
 MCA_ARGS = ("-mtriple=thumbv7em-none-eabihf", "-mcpu=cortex-m7", "-iterations=1")
@@ -63,9 +65,11 @@ METHOD_NOTE = ("estimated M7 cycles: the step's executed instruction path (the r
                "instruction by instruction in unicorn over the bench states) fed to llvm-mca's Cortex-M7 "
                "pipeline model (-mcpu=cortex-m7, one iteration, Total Cycles); not modelled: branch penalties, "
                "caches, flash wait states, interrupts (TCM placement makes every memory access single-cycle). "
-               "bound: the essential FP operations, compares, square roots, divisions, loads and stores per step at "
-               "the model's issue limits (an FP write issues alone, 13 cycles a VSQRT/VDIV, the rest two a cycle); "
-               "overlap bound: the same with every unit overlapping perfectly.")
+               "bound: the algorithm's essential operations per step (sums, products, compares, square roots, "
+               "divisions, loads, stores) as the instructions of the step's number format (float32: one each; "
+               "fixed point: each helper's shortest integer sequence) at the model's issue limits (an FP write "
+               "issues alone, 13 cycles a VSQRT/VDIV, 6 a UDIV, the rest two a cycle, one shifter operation, "
+               "multiply, store or branch a cycle); overlap bound: the same with every unit overlapping perfectly.")
 
 #: instructions LLVM 14's Cortex-M7 model has no scheduling data for -> an equivalent with the same timing
 _SUBSTITUTES = {"vcmpe.f32": "vcmp.f32", "vcmpe.f64": "vcmp.f64", "vcmp.f32": "vcmp.f32", "vcmp.f64": "vcmp.f64"}
@@ -368,6 +372,11 @@ SQRT_CYCLES, DIV_CYCLES, ISSUE_WIDTH = 14, 16, 2
 #: for 13 cycles, back to back too; compares, branches, loads and stores issue two per cycle, stores
 #: one per cycle.
 MODEL_DIVIDER_CYCLES = 13
+#: The model's integer rules (same tests): a UDIV holds issue for 6 cycles, alone; plain ALU operations
+#: dual-issue; an instruction using the shifter (a shift, an operand shifted by an immediate), a
+#: multiply (the one MAC unit: MUL, MLS, SMULL, SMLAL, UMULL), a store and a branch one a cycle each
+#: (each pairs with another kind).  The overlap bound counts a UDIV's 6 cycles in the divider only.
+MODEL_UDIV_CYCLES = 6
 
 
 def op_totals(ops: dict[str, dict[str, int]], mult: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
@@ -375,39 +384,71 @@ def op_totals(ops: dict[str, dict[str, int]], mult: dict[str, np.ndarray]) -> di
     other unit its counts x its multiplicity (``mult``, ``Topology.op_multiplicities``: at least
     ``per_candidate``, the evaluated candidates); with a ``first_candidate`` entry the first
     evaluated candidate counts that instead (e.g. a candidate whose prediction is the estimate
-    itself).  A unit without a multiplicity, or a multiplicity without a unit, is an error."""
+    itself).  A unit without a multiplicity, or a multiplicity without a unit, is an error; so is a
+    count of no essential operation (:data:`OPERATIONS`)."""
     units = set(ops) - {"per_step", "first_candidate"}
     if units != set(mult) or "per_candidate" not in units:
         raise CycleError(f"essential operations {sorted(units)} and their multiplicities {sorted(mult)} differ")
+    unknown = sorted({key for counts in ops.values() for key in counts} - set(OPERATIONS))
+    if unknown:
+        raise CycleError(f"essential operations count {unknown}: not among {', '.join(OPERATIONS)}")
     n = {u: np.asarray(m, dtype=np.float64) for u, m in mult.items()}
     n_first = np.minimum(n["per_candidate"], 1.0)
     n["per_candidate"] = n["per_candidate"] - n_first
     first = ops.get("first_candidate", ops["per_candidate"])
     return {key: (ops["per_step"].get(key, 0) + n_first * first.get(key, 0)
                   + sum(n[u] * ops[u].get(key, 0) for u in sorted(units)))
-            for key in ("fp", "cmp", "sqrt", "div", "load", "store")}
+            for key in OPERATIONS}
 
 
-def overlap_bound(t: dict[str, np.ndarray]) -> np.ndarray:
-    """The essential operations ``t`` (:func:`op_totals`) at the core's issue limits, every unit
-    overlapping perfectly: max(FP issue, divider busy, memory, all instructions / 2).  Holds for any
-    in-order dual-issue core with these unit limits, whatever its write-back rules."""
-    fp_issue = t["fp"] + t["cmp"] + t["sqrt"] + t["div"]
-    mem = t["load"] + t["store"]
-    return np.maximum.reduce([fp_issue, SQRT_CYCLES * t["sqrt"] + DIV_CYCLES * t["div"], mem,
-                              np.ceil((fp_issue + mem) / ISSUE_WIDTH)])
+def instruction_totals(t: dict[str, np.ndarray], costs: dict[str, dict[str, int]]) -> dict[str, np.ndarray]:
+    """The essential operations ``t`` (:func:`op_totals`) as instructions, per class of
+    :data:`INSTRUCTION_CLASSES`: each operation's count times the instructions the step's number format
+    needs for it (``NumberFormat.op_costs``).  An operation without a cost, or a class the model has
+    no issue rule for, is an error."""
+    missing = sorted(set(t) - set(costs))
+    unknown = sorted({c for cost in costs.values() for c in cost} - set(INSTRUCTION_CLASSES))
+    if missing or unknown:
+        raise CycleError(f"number format costs: no cost for {missing}" if missing else
+                         f"number format costs: no issue rule for the instruction classes {unknown}")
+    shape = np.shape(next(iter(t.values()))) if t else ()
+    out = {c: np.zeros(shape) for c in INSTRUCTION_CLASSES}
+    for op, n in t.items():
+        for c, k in costs[op].items():
+            out[c] = out[c] + k * np.asarray(n, dtype=np.float64)
+    return out
 
 
-def model_bound(t: dict[str, np.ndarray], *, float_unit: bool = True) -> np.ndarray:
-    """The essential operations ``t`` at the issue limits of the estimate's pipeline model
-    (:data:`MODEL_DIVIDER_CYCLES`): FP instructions that write a register one a cycle, alone; every
-    square root and division 13 cycles; compares, branches, loads and stores in the remaining cycles,
-    two a cycle, one store a cycle.  A step in an integer format (``float_unit`` false) runs no FP
-    instruction: its bound is :func:`overlap_bound`."""
-    if not float_unit:
-        return overlap_bound(t)
-    paired = np.maximum.reduce([np.ceil((t["cmp"] + t["load"] + t["store"]) / ISSUE_WIDTH), t["store"], t["cmp"]])
-    return t["fp"] + MODEL_DIVIDER_CYCLES * (t["sqrt"] + t["div"]) + paired
+def _counts(c: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """Every class of :data:`INSTRUCTION_CLASSES` (zero where ``c`` has none)."""
+    zero = np.zeros(np.shape(next(iter(c.values())))) if c else np.zeros(1)
+    return {k: np.asarray(c[k], dtype=np.float64) if k in c else zero for k in INSTRUCTION_CLASSES}
+
+
+def overlap_bound(c: dict[str, np.ndarray]) -> np.ndarray:
+    """The essential instructions ``c`` (:func:`instruction_totals`) at the core's issue limits, every
+    unit overlapping perfectly: max(FP issue, divider busy, memory, shifter, multiplier, branches, all
+    instructions / 2).  Holds for any in-order dual-issue core with these unit limits, whatever its
+    write-back rules."""
+    c = _counts(c)
+    fp_issue = c["fp"] + c["cmp"] + c["sqrt"] + c["div"]
+    mem = c["load"] + c["store"]
+    integer = c["alu"] + c["shift"] + c["mac"] + c["udiv"] + c["branch"]
+    return np.maximum.reduce([fp_issue, SQRT_CYCLES * c["sqrt"] + DIV_CYCLES * c["div"] + MODEL_UDIV_CYCLES * c["udiv"],
+                              mem, c["shift"], c["mac"], c["branch"],
+                              np.ceil((fp_issue + mem + integer) / ISSUE_WIDTH)])
+
+
+def model_bound(c: dict[str, np.ndarray]) -> np.ndarray:
+    """The essential instructions ``c`` (:func:`instruction_totals`) at the issue limits of the
+    estimate's pipeline model (:data:`MODEL_DIVIDER_CYCLES`, :data:`MODEL_UDIV_CYCLES`): FP instructions
+    that write a register one a cycle, alone; every square root and division 13 cycles, every UDIV 6,
+    alone; everything else in the remaining cycles, two a cycle, but one store, one compare of the
+    float step, one shifter operation, one multiply and one branch a cycle."""
+    c = _counts(c)
+    rest = c["cmp"] + c["load"] + c["store"] + c["alu"] + c["shift"] + c["mac"] + c["branch"]
+    paired = np.maximum.reduce([np.ceil(rest / ISSUE_WIDTH), c["store"], c["cmp"], c["shift"], c["mac"], c["branch"]])
+    return c["fp"] + MODEL_DIVIDER_CYCLES * (c["sqrt"] + c["div"]) + MODEL_UDIV_CYCLES * c["udiv"] + paired
 
 
 def check_bound(symbol: str, est_cycles: np.ndarray, bound: np.ndarray) -> None:
@@ -434,9 +475,10 @@ def strategy_cycles(model: Model, tables: Any, elf_path: Path, *, n_bench: int =
     expected = expected_outputs(topo, tables, states)
     est = estimate_cycles(elf_path, f"{model.prefix}_step", states, expected, max_states=max_states, log=log)
     idx = evenly_spaced(np.arange(len(states)), max_states)
-    totals = op_totals(topo.essential_ops(model, tables),
-                       topo.op_multiplicities(model, tables, states[idx], expected[idx]))
-    bound = model_bound(totals, float_unit=not tables.nf.quantised)
+    totals = instruction_totals(op_totals(topo.essential_ops(model, tables),
+                                          topo.op_multiplicities(model, tables, states[idx], expected[idx])),
+                                tables.nf.op_costs)
+    bound = model_bound(totals)
     overlap = overlap_bound(totals)
     check_bound(f"{model.prefix}_step", est.cycles, bound)
     s = est.summary

@@ -70,7 +70,7 @@ def test_emulated_bench(tmp_path, capsys):
 @pytest.mark.slow
 def test_emulated_bench_fixed_point_beside_float32(tmp_path, capsys):
     """A fixed-point config: its own column (self-test bit-exact on the emulated M7, else the bench
-    fails) and the float32 variant's beside it."""
+    fails) and the float32 variant's beside it; its cycle estimate and its bound in integer instructions."""
     require_tool("qemu-system-arm", "qemu-system-arm")
     require_tool("arm-none-eabi-gcc", "gcc-arm-none-eabi")
     js = tmp_path / "benchfx.json"
@@ -84,6 +84,12 @@ def test_emulated_bench_fixed_point_beside_float32(tmp_path, capsys):
         by = e["m7_by_number_format"]
         assert by["fixed"]["states_checked"] == 1000 + N_BENCH  # every one bit-exact, or bench raises
         assert by["float32"]["states_checked"] == 1000 + N_BENCH
+        # the bound in integer instructions (each operation its helper's shortest sequence): every traced
+        # state's estimate at least its bound (else strategy_cycles raises), the estimate within a few
+        # times it (the float-style count, one instruction an operation, left it 7-9 times below)
+        assert 0 < e["m7_cycles_bound_min"] <= e["m7_cycles_bound"] <= e["m7_cycles_est_median"]
+        assert e["m7_cycles_est_over_bound"] < 4
+        assert 0 < e["m7_cycles_bound_overlap"] <= e["m7_cycles_bound"]
     out = capsys.readouterr().out
     assert "fixed" in out and "float32" in out
 

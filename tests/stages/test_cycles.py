@@ -8,6 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from codegen.numfmt import FIXED, FLOAT32
+from codegen.numfmt.opcost import FIXED_OP_COSTS, INSTRUCTION_CLASSES
 from codegen.stages import cycles
 
 from conftest import require_tool
@@ -75,40 +77,72 @@ def test_objdump_forms_the_model_lacks_are_substituted():
 
 
 def _totals(**counts: int) -> dict[str, np.ndarray]:
-    keys = ("fp", "cmp", "sqrt", "div", "load", "store")
-    return {k: np.array([float(counts.get(k, 0))]) for k in keys}
+    """Instruction totals of one state (classes not named: zero)."""
+    return {k: np.array([float(counts.get(k, 0))]) for k in INSTRUCTION_CLASSES}
 
 
 def test_op_totals_per_step_candidate_member():
-    ops = {"per_step": {"fp": 10, "cmp": 2, "sqrt": 0, "div": 0, "load": 4, "store": 0},
-           "per_candidate": {"fp": 5, "cmp": 1, "sqrt": 1, "div": 0, "load": 2, "store": 0},
-           "per_member": {"fp": 1, "cmp": 1, "sqrt": 0, "div": 0, "load": 2, "store": 0}}
+    ops = {"per_step": {"add": 6, "mul": 4, "cmp": 2, "sqrt": 0, "div": 0, "load": 4, "store": 0},
+           "per_candidate": {"add": 3, "mul": 2, "cmp": 1, "sqrt": 1, "div": 0, "load": 2, "store": 0},
+           "per_member": {"add": 1, "cmp": 1, "sqrt": 0, "div": 0, "load": 2, "store": 0}}
     t = cycles.op_totals(ops, {"per_candidate": np.array([0, 7]), "per_member": np.array([0, 3])})
-    assert list(t["fp"]) == [10, 10 + 35 + 3] and list(t["sqrt"]) == [0, 7] and list(t["load"]) == [4, 4 + 14 + 6]
+    assert list(t["add"]) == [6, 6 + 21 + 3] and list(t["mul"]) == [4, 4 + 14]
+    assert list(t["sqrt"]) == [0, 7] and list(t["load"]) == [4, 4 + 14 + 6]
     # any further unit, times its own multiplicity (e.g. a division per unclamped T_N)
-    ops["per_unclamped"] = {"fp": 0, "cmp": 0, "sqrt": 0, "div": 1, "load": 0, "store": 0}
+    ops["per_unclamped"] = {"add": 0, "cmp": 0, "sqrt": 0, "div": 1, "load": 0, "store": 0}
     t = cycles.op_totals(ops, {"per_candidate": np.array([1, 7]), "per_member": np.array([1, 3]),
                                "per_unclamped": np.array([0, 2])})
-    assert list(t["div"]) == [0, 2] and list(t["fp"]) == [10 + 5 + 1, 10 + 35 + 3]
+    assert list(t["div"]) == [0, 2] and list(t["add"]) == [6 + 3 + 1, 6 + 21 + 3]
     del ops["per_unclamped"]
     # a first candidate without prediction (V0 of the flux-geometry step): its counts replace one candidate's
-    ops["first_candidate"] = {"fp": 3, "cmp": 1, "sqrt": 0, "div": 0, "load": 0, "store": 0}
+    ops["first_candidate"] = {"add": 2, "mul": 1, "cmp": 1, "sqrt": 0, "div": 0, "load": 0, "store": 0}
     t = cycles.op_totals(ops, {"per_candidate": np.array([0, 1, 7]), "per_member": np.zeros(3)})
-    assert list(t["fp"]) == [10, 13, 10 + 3 + 30] and list(t["sqrt"]) == [0, 0, 6]
+    assert list(t["add"]) == [6, 8, 6 + 2 + 18] and list(t["sqrt"]) == [0, 0, 6]
 
 
 def test_op_totals_needs_a_multiplicity_for_every_unit():
-    ops = {"per_step": {"fp": 1}, "per_candidate": {"fp": 1}, "per_member": {"fp": 1}}
+    ops = {"per_step": {"add": 1}, "per_candidate": {"add": 1}, "per_member": {"add": 1}}
     with pytest.raises(cycles.CycleError, match="multiplicities"):
         cycles.op_totals(ops, {"per_candidate": np.array([1])})
     with pytest.raises(cycles.CycleError, match="multiplicities"):
         cycles.op_totals(ops, {"per_candidate": np.array([1]), "per_member": np.array([1]), "per_x": np.array([1])})
 
 
+def test_op_totals_refuses_an_operation_no_format_costs():
+    # the algorithm counts operations, never instructions: "fp" is a float32 instruction class
+    ops = {"per_step": {"fp": 1}, "per_candidate": {"add": 1}}
+    with pytest.raises(cycles.CycleError, match="not among"):
+        cycles.op_totals(ops, {"per_candidate": np.array([1])})
+
+
+def test_instruction_totals_per_number_format():
+    t = {k: np.array([float(n)]) for k, n in
+         {"add": 10, "mul": 6, "cmp": 3, "sqrt": 1, "div": 2, "load": 5, "store": 4}.items()}
+    # float32: one instruction an operation; an add and a product are both FP writes
+    f = cycles.instruction_totals(t, FLOAT32.op_costs)
+    assert (f["fp"][0], f["cmp"][0], f["sqrt"][0], f["div"][0], f["load"][0], f["store"][0]) == (16, 3, 1, 2, 5, 4)
+    assert all(f[k][0] == 0 for k in ("alu", "shift", "mac", "udiv", "branch"))
+    # fixed point: each operation its helper's integer sequence, no FP instruction at all
+    x = cycles.instruction_totals(t, FIXED.op_costs)
+    assert x["fp"][0] == x["cmp"][0] == x["sqrt"][0] == x["div"][0] == 0
+    costs = FIXED_OP_COSTS
+    for cls in ("alu", "shift", "mac", "udiv", "branch"):
+        assert x[cls][0] == sum(int(t[op][0]) * costs[op].get(cls, 0) for op in t), cls
+    assert x["mac"][0] == 6 * 1 + 2 * 4 + 1 * 3 and x["udiv"][0] == 2 * 2 + 1 * 3
+    with pytest.raises(cycles.CycleError, match="no cost"):
+        cycles.instruction_totals(t, {k: v for k, v in FIXED_OP_COSTS.items() if k != "div"})
+    with pytest.raises(cycles.CycleError, match="no issue rule"):
+        cycles.instruction_totals(t, {**FIXED_OP_COSTS, "div": {"vdivx": 1}})
+
+
 def test_overlap_bound_lets_every_unit_overlap():
     assert cycles.overlap_bound(_totals(fp=10, cmp=2, load=4))[0] == 12  # FP issue
     assert cycles.overlap_bound(_totals(fp=40, sqrt=7))[0] == 14 * 7  # the square-root unit
     assert cycles.overlap_bound(_totals(fp=5, load=20, store=4))[0] == 24  # memory
+    # integer units: two a cycle, one shifter operation, multiply, branch a cycle, the divider
+    assert cycles.overlap_bound(_totals(alu=30, shift=4, load=2))[0] == 18
+    assert cycles.overlap_bound(_totals(alu=2, shift=9, mac=3))[0] == 9
+    assert cycles.overlap_bound(_totals(alu=4, udiv=3))[0] == 18
 
 
 def test_an_estimate_below_its_bound_is_an_error():
@@ -121,9 +155,22 @@ def test_model_bound_adds_what_the_model_cannot_overlap():
     # FP writes alone, 13 cycles a square root, compares + memory two a cycle (one store a cycle)
     assert cycles.model_bound(_totals(fp=10, sqrt=2, cmp=3, load=5, store=2))[0] == 10 + 26 + 5
     assert cycles.model_bound(_totals(fp=1, store=6, load=2))[0] == 1 + 6
-    # an integer format runs no FP instruction: the overlap bound
-    t = _totals(fp=10, sqrt=2, load=4)
-    assert cycles.model_bound(t, float_unit=False)[0] == cycles.overlap_bound(t)[0]
+    # integer: 6 cycles a UDIV, alone; the rest two a cycle, one shifter operation, one multiply, one
+    # branch, one store a cycle
+    assert cycles.model_bound(_totals(alu=10, shift=2, mac=1, udiv=2, load=3))[0] == 12 + 8
+    assert cycles.model_bound(_totals(alu=1, shift=7, mac=1))[0] == 7
+    assert cycles.model_bound(_totals(alu=1, mac=5, branch=2))[0] == 5
+    assert cycles.model_bound(_totals(alu=1, branch=4, store=1))[0] == 4
+
+
+def test_the_fixed_point_bound_counts_integer_instructions():
+    # the same operations bound far higher in fixed point than one instruction each: a product is an
+    # SMLAL, its two words shifted together and a saturation test
+    t = {k: np.array([float(n)]) for k, n in
+         {"add": 20, "mul": 20, "cmp": 4, "sqrt": 1, "div": 0, "load": 10, "store": 6}.items()}
+    fixed = cycles.model_bound(cycles.instruction_totals(t, FIXED.op_costs))[0]
+    as_one_instruction = cycles.overlap_bound(cycles.instruction_totals(t, FLOAT32.op_costs))[0]
+    assert fixed > 2 * as_one_instruction
 
 
 # The model's issue rules the bound rests on, each counted by hand.
@@ -161,6 +208,47 @@ def test_model_bound_is_a_bound_of_the_model(seed):
     kinds = [k for k, n in counts.items() for _ in range(n)]
     rng.shuffle(kinds)
     block = [forms[k].format(d=i % 24) for i, k in enumerate(kinds)]
+    assert cycles.mca_cycles(block) >= cycles.model_bound(_totals(**counts))[0]
+
+
+def test_the_model_holds_issue_6_cycles_a_udiv():
+    # a UDIV issues alone and holds issue for 6 cycles: nothing pairs with it, before or after
+    div = [f"\tudiv\tr{d}, r9, r10" for d in range(4)]
+    assert 4 * 6 <= cycles.mca_cycles(div) <= 4 * 6 + 3
+    adds = [f"\tadd.w\tr{d}, r11, r12" for d in range(4, 8)]
+    assert cycles.mca_cycles([div[0], *adds]) >= 6 + 2
+    assert cycles.mca_cycles([adds[0], div[0]]) >= 1 + 6
+
+
+def test_the_model_integer_units():
+    # plain ALU operations dual-issue; the shifter (a shift, an operand shifted by an immediate), the MAC
+    # unit (MUL, MLS, SMULL, SMLAL, UMULL), stores and branches one a cycle each
+    alu = [f"\tadd.w\tr{d}, r9, r10" for d in range(8)]
+    assert cycles.mca_cycles(alu) <= 5
+    for form in ("\tlsl.w\tr{d}, r9, #3", "\torr.w\tr{d}, r9, r10, lsl #13", "\tmul\tr{d}, r9, r10",
+                 "\tsmull\tr{d}, r12, r9, r10", "\tmls\tr{d}, r9, r10, r11", "\tstr\tr{d}, [r9, #4]"):
+        assert cycles.mca_cycles([form.format(d=d) for d in range(8)]) >= 8, form
+    assert cycles.mca_cycles(["\tbne\t.Lt"] * 8) >= 8
+    # ... but each pairs with an operation of another kind: SMLAL with an ALU operation, a shift with a load
+    smlal_add = [f"\tsmlal\tr0, r1, r2, r3\n\tadd.w\tr{4 + d}, r9, r10" for d in range(4)]
+    assert cycles.mca_cycles(smlal_add) <= 7
+    lsl_ldr = [f"\tlsl.w\tr{d}, r9, #2\n\tldr\tr{4 + d}, [r10]" for d in range(4)]
+    assert cycles.mca_cycles(lsl_ldr) <= 6
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_integer_model_bound_is_a_bound_of_the_model(seed):
+    # any order of independent integer instructions of the counted classes takes at least the model bound
+    rng = np.random.default_rng(100 + seed)
+    counts = {"alu": int(rng.integers(5, 40)), "shift": int(rng.integers(0, 20)), "mac": int(rng.integers(0, 12)),
+              "udiv": int(rng.integers(0, 3)), "branch": int(rng.integers(0, 8)), "load": int(rng.integers(0, 20)),
+              "store": int(rng.integers(0, 10))}
+    forms = {"alu": "\tadd.w\tr{d}, r9, r10", "shift": "\torr.w\tr{d}, r9, r10, lsr #19",
+             "mac": "\tsmull\tr{d}, r11, r9, r10", "udiv": "\tudiv\tr{d}, r9, r10", "branch": "\tbne\t.Lt",
+             "load": "\tldr\tr{d}, [r12, #4]", "store": "\tstr\tr9, [r12, #8]"}
+    kinds = [k for k, n in counts.items() for _ in range(n)]
+    rng.shuffle(kinds)
+    block = [forms[k].format(d=i % 8) for i, k in enumerate(kinds)]
     assert cycles.mca_cycles(block) >= cycles.model_bound(_totals(**counts))[0]
 
 
