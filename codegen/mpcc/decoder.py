@@ -65,13 +65,20 @@ class Problem:
 @dataclass(frozen=True)
 class Result:
     """Per lane: the best sequence's index, its distance, nodes entered, leaves evaluated (with the
-    initial guess), whether the budget stopped the search."""
+    initial guess), whether the budget stopped the search; and what the expansions did, for the cycle
+    bound's multiplicities (``codegen.mpcc.opcount``): nodes expanded (the root and every entered
+    node above level 0), terms H_ij u_j of eq. (10) over them, children whose distance (11) was
+    computed (the allowed digits), and of those the children at level 0 (the leaves' candidates)."""
 
     best: np.ndarray  # int64
     cost: np.ndarray  # float32
     nodes: np.ndarray  # int64
     evals: np.ndarray  # int64
     hit: np.ndarray  # bool
+    expansions: np.ndarray | None = None  # int64
+    terms: np.ndarray | None = None  # int64
+    children: np.ndarray | None = None  # int64
+    leaf_children: np.ndarray | None = None  # int64
 
 
 def digits_of(index: np.ndarray, base: int, n_vars: int) -> np.ndarray:
@@ -135,6 +142,7 @@ def search(p: Problem, ubar: np.ndarray, prev: np.ndarray, pen: np.ndarray | Non
     hit = np.zeros(n, bool)
     active = np.ones(n, bool)
     prev = np.asarray(prev, np.int64)
+    n_exp, n_terms, n_child, n_leaf_child = (np.zeros(n, np.int64) for _ in range(4))
 
     def expand(lanes: np.ndarray) -> None:
         """Children of each lane's node at its level ``lev``, sorted by (D, digit)."""
@@ -167,6 +175,10 @@ def search(p: Problem, ubar: np.ndarray, prev: np.ndarray, pen: np.ndarray | Non
             cdg[lanes[sel], lv[sel], rank[sel, g]] = g
         nch[lanes, lv] = ok.sum(axis=1)
         pos[lanes, lv] = 0
+        n_exp[lanes] += 1
+        n_terms[lanes] += nv - 1 - lv
+        n_child[lanes] += nch[lanes, lv]
+        n_leaf_child[lanes] += np.where(lv == 0, nch[lanes, lv], 0)
 
     expand(np.arange(n))
     while True:
@@ -202,7 +214,7 @@ def search(p: Problem, ubar: np.ndarray, prev: np.ndarray, pen: np.ndarray | Non
         top = lev[back] == nv - 1
         active[back[top]] = False
         lev[back[~top]] += 1
-    return Result(best, rho2, nodes, evals, hit)
+    return Result(best, rho2, nodes, evals, hit, n_exp, n_terms, n_child, n_leaf_child)
 
 
 def exhaustive(p: Problem, ubar: np.ndarray, prev: np.ndarray, pen: np.ndarray | None = None,

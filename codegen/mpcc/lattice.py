@@ -71,18 +71,22 @@ def lattice(rs_ohm: float, l_h: float, ts_s: float, udc_nom_v: float, lambda_u: 
     return Lattice(a, b, lam, g0, s, h, w1, w2)
 
 
-#: the clock the default node budget is estimated for (STM32H743)
+#: the clock the default node budget is calibrated for (STM32H743)
 CLOCK_HZ = 480e6
-#: the share of the control period the decoder's worst case may take
-PERIOD_SHARE = 0.5
+#: the share of the control period the step's worst case may take (the rest: the interrupt's other
+#: work, and what the cycle estimate does not model: branch penalties, caches, wait states)
+PERIOD_SHARE = 0.6
 
 
 def default_node_budget(dt_s: float, n: int, levels: int) -> int:
     """The node budget when ``controller.node_budget`` is not given: the nodes that fit
-    ``PERIOD_SHARE`` of the period at ``CLOCK_HZ`` after the fixed part of the step (an estimate of
-    Cortex-M7 cycles, docs/mpcc.md "Node budget": fixed 600 + 40 (N + 1) + 6 N (2 N + 3) cycles, per
-    node 30 + 18 N + 12 |alphabet|), at least one dive (3N nodes), at most 65535 (``n_nodes`` is 16-bit)."""
+    ``PERIOD_SHARE`` of the period at ``CLOCK_HZ`` after the fixed part of the step, at least one dive
+    (3N nodes), at most 65535 (``n_nodes`` is 16-bit).  Cortex-M7 cycles calibrated on ``mpcgen
+    bench --emulated``'s estimate (docs/mpcc.md "Node budget"): fixed part 600 + 40 (N + 1) +
+    6 N (2 N + 3) cycles, per node 50 + 38 N + 210 (|alphabet| - 2) cycles, about 10 % above the
+    largest (cycles - fixed part) / budget traced at the budget for N = 3..6 (two-level: 146..244,
+    T-type: 334..436 cycles a node)."""
     cycles = PERIOD_SHARE * dt_s * CLOCK_HZ
     fixed = 600 + 40 * (n + 1) + 6 * n * (2 * n + 3)
-    per_node = 30 + 18 * n + 12 * levels
+    per_node = 50 + 38 * n + 210 * (levels - 2)
     return int(min(65535, max(3 * n, (cycles - fixed) // per_node)))

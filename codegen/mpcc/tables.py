@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from codegen.errors import ConfigError
 from codegen.kernels.consts import Const, HasConsts, fault_action_constants, leading_constants
 from codegen.kernels.guard import Check
 from codegen.kernels.stepformat import step_format
@@ -43,7 +44,9 @@ class Adapter:
     ``template``: the jinja file with the C twins of ``decide`` and ``safe``; ``topology_macro``: the
     binding's topology macro; ``extra_constants(model)``: constants ``decide`` reads (float64);
     ``neutral_point``: the input fields (u_c1, u_c2) of a DC link split at a midpoint that position 0
-    connects to, for the neutral-point penalty of docs/mpcc.md eq. (14) (None: no midpoint, no term)."""
+    connects to, for the neutral-point penalty of docs/mpcc.md eq. (14) (None: no midpoint, no term);
+    ``decision_ops``: the essential operations of ``decide`` beyond what the step already computed, as
+    (kind, count) pairs of ``codegen.mpcc.opcount`` (the cycle bound)."""
 
     levels: tuple[int, ...]
     max_step: int | None
@@ -61,6 +64,7 @@ class Adapter:
     topology_macro: str
     extra_constants: Callable[[Model], list[Const]]
     neutral_point: tuple[str, str] | None = None
+    decision_ops: tuple[tuple[str, int], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -161,8 +165,14 @@ def node_budget_of(model: Model, adapter: Adapter) -> int:
 
 
 def derive_mpcc(model: Model, adapter: Adapter) -> MpccTables:
-    """The tables of ``model``'s long-horizon step (float64 once, rounded once to float32)."""
+    """The tables of ``model``'s long-horizon step (float64 once, rounded once to float32).  A quantised
+    number format is a ConfigError (the config loader refuses it already; a variant made with
+    ``Model.with_controller``, e.g. ``bench --emulated``'s other formats, is refused here)."""
     c = model.controller
+    if number_format(c.number_format).quantised:
+        raise ConfigError(model.source, "controller.number_format", c.number_format,
+                          f"controller.strategy = '{c.strategy}' runs in float32 only (no fixed-point sphere "
+                          "decoder, docs/mpcc.md \"Limits\")")
     if adapter.neutral_point is not None and 0 not in adapter.levels:
         raise ValueError("a neutral-point term needs position 0 (the midpoint) in the alphabet")
     if adapter.max_step is not None and list(adapter.levels) != list(range(adapter.levels[0], adapter.levels[-1] + 1)):

@@ -154,3 +154,30 @@ def test_emulated_bench_without_fpu(tmp_path, capsys):
 def test_bench_board_needs_emulated(capsys):
     assert main(["bench", str(SPMSM), "--board", "qemu-m3", "-q"]) == 2
     assert "--board = qemu-m3: the board of --emulated" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("config", ["mpcc_spmsm", "mpcc_tlevel"])
+def test_emulated_bench_long_horizon(tmp_path, capsys, config):
+    """The long-horizon family (docs/mpcc.md): host ns/step, M7 instructions and estimated cycles over the
+    bench states with the bound of codegen/mpcc/opcount.py (every traced state's estimate at least its
+    bound, else strategy_cycles raises); its fixed-point column says why it is not measured (the family
+    runs in float32 only) instead of failing."""
+    require_tool("qemu-system-arm", "qemu-system-arm")
+    require_tool("arm-none-eabi-gcc", "gcc-arm-none-eabi")
+    from conftest import EXAMPLES
+
+    js = tmp_path / "bench-mpcc.json"
+    assert main(["bench", str(EXAMPLES / f"{config}.toml"), "--emulated", "--set", "controller.horizon=2",
+                 "--json", str(js), "--repeats", "1", "-q"]) == 0
+    data = json.loads(js.read_text())
+    e = data["strategies"]["mpcc"]
+    assert e["host_ns_per_step"] > 0 and e["m7_states"] == e["m7_cycles_est_states"] == N_BENCH
+    assert 0 < e["m7_instructions_min"] <= e["m7_instructions_per_step"] <= e["m7_instructions_max"]
+    assert e["m7_cycles_est_min"] <= e["m7_cycles_est_median"] <= e["m7_cycles_est_max"]
+    # the bound varies with the nodes the decoder enters: a range, below the estimate
+    assert 0 < e["m7_cycles_bound_min"] < e["m7_cycles_bound_max"]
+    assert e["m7_cycles_bound"] <= e["m7_cycles_est_median"] and e["m7_cycles_est_over_bound"] >= 1
+    assert e["m7_instructions_per_step_fixed"] is None
+    assert "float32 only" in e["m7_by_number_format"]["fixed"]["error"]
+    assert "n/a" in capsys.readouterr().out

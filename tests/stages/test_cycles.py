@@ -290,3 +290,21 @@ def test_trace_a_small_function(tmp_path: Path):
     assert est.cycles[1] - est.cycles[0] >= 5 * 6
     # at least the square root and the chain: 14 + 3 x 6
     assert est.cycles[0] >= 14 + 3 * 6
+
+
+def test_traced_outputs_compare_fields_not_padding():
+    # an output record with tail padding (u16 fields after a float): the padding is not data, a field is
+    dt = np.dtype({"names": ["x", "n"], "formats": [np.float32, np.uint16], "offsets": [0, 4], "itemsize": 8})
+    want = np.zeros(1, dt)
+    want["x"], want["n"] = 1.5, 7
+    raw = bytearray(want.tobytes())
+    raw[6:8] = b"\x63\x41"  # garbage in the padding
+    assert cycles._same_fields(bytes(raw), want[0])
+    raw[4] ^= 1  # n differs
+    assert not cycles._same_fields(bytes(raw), want[0])
+    neg_zero = want.copy()
+    neg_zero["x"] = -0.0
+    assert not cycles._same_fields(np.zeros(1, dt).tobytes(), neg_zero[0])  # bits, not values
+    # an array without fields is compared whole
+    assert cycles._same_fields(np.float32([2.0]).tobytes(), np.float32([2.0]))
+    assert not cycles._same_fields(np.float32([2.0]).tobytes(), np.float32([3.0]))

@@ -102,7 +102,10 @@ ADAPTER = Adapter(levels=(-1, 0, 1), max_step=1, input_record=INPUT, guard=GUARD
                   udc_fields=("uc1_v", "uc2_v"), prev_field="prev_vector", guard_limits=guard_limits,
                   output_record=output_record, decide=_decide, safe=_safe, template="ttype/mpcc_decision.j2",
                   topology_macro="MPC_TOPOLOGY_T_TYPE", extra_constants=_extra_constants,
-                  neutral_point=("uc1_v", "uc2_v"))
+                  neutral_point=("uc1_v", "uc2_v"),
+                  # psi* = sqrt(psi_f^2 + (L i_q*)^2) (3 + the root; V_o is the neutral-point block's);
+                  # L, psi_f^2 read; psi_ref, vo_v, t_n_s, seg_s[7], states[7], vector stored
+                  decision_ops=(("add", 3), ("sqrt", 1), ("load", 2), ("store", 3 + 2 * N_SEGMENTS + 1)))
 
 _DOC = """
  * out.states[0..6] = one switching state id 9(Sa+1) + 3(Sb+1) + (Sc+1)

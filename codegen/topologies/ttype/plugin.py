@@ -196,21 +196,25 @@ closed_loop_trace, period_stepper, firmware_plant = (sim.SIMULATOR.closed_loop_t
 
 def essential_ops(model: Model, tables: Tables) -> dict[str, dict[str, int]]:
     """Essential operations per step, per candidate, per member, per virtual member and per
-    unclamped T_N (``opcount``): the cycle bound."""
+    unclamped T_N (``opcount``): the cycle bound (the long-horizon family: ``codegen.mpcc.opcount``)."""
     from codegen.topologies.ttype import opcount
 
     if isinstance(tables, MpccTables):
-        raise Unsupported(f"{model.source}: the cycle bound of controller.strategy = 'mpcc' is not counted yet "
-                          "(its node count varies per step: docs/mpcc.md \"Node budget\")")
+        from codegen.mpcc import opcount as mpcc_opcount
+
+        return mpcc_opcount.essential_ops(tables)
 
     return opcount.essential_ops(tables)
 
 
 def op_multiplicities(model: Model, tables: Tables, states: np.ndarray, expected: np.ndarray) -> dict[str, np.ndarray]:
     """Per state, how often each unit of ``essential_ops`` runs: the output's ``n_eval`` and
-    ``n_members``, and the reference's count of virtual members and of unclamped T_N."""
+    ``n_members``, and the reference's count of virtual members and of unclamped T_N (the long-horizon
+    family: ``codegen.mpcc.opcount.multiplicities``)."""
     if isinstance(tables, MpccTables):
-        raise Unsupported("the cycle bound of controller.strategy = 'mpcc' is not counted yet")
+        from codegen.mpcc import opcount as mpcc_opcount
+
+        return mpcc_opcount.multiplicities(tables, states, expected)
     deadbeat = ref.deadbeat_counts(tables, states)
     return {"per_candidate": expected["n_eval"], "per_member": expected["n_members"],
             "per_virtual_member": deadbeat["virtual"], "per_unclamped": deadbeat["unclamped"]}

@@ -59,7 +59,8 @@ def _extra_constants(model: Model) -> list[Const]:
 ADAPTER = Adapter(levels=(-1, 1), max_step=None, input_record=INPUT, guard=GUARD, fault=FAULT, fault_bits=FAULT_BITS,
                   udc_fields=("udc_v",), prev_field="prev_sw", guard_limits=guard_limits, output_record=output_record,
                   decide=_decide, safe=_safe, template="twolevel/mpcc_decision.j2",
-                  topology_macro="MPC_TOPOLOGY_TWO_LEVEL", extra_constants=_extra_constants)
+                  topology_macro="MPC_TOPOLOGY_TWO_LEVEL", extra_constants=_extra_constants,
+                  decision_ops=(("load", 1), ("store", 2)))  # the vector looked up; sw, vector
 
 _DOC = """
  * out.sw = Sa*4 + Sb*2 + Sc, one bit per leg a, b, c: 1 = upper switch on

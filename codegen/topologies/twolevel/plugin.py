@@ -17,7 +17,6 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from codegen.errors import Unsupported
 from codegen.hostbuild import HostLib
 from codegen.model import Model
 from codegen.mpcc.states import adversarial
@@ -181,18 +180,25 @@ closed_loop_trace, period_stepper, firmware_plant = (sim.SIMULATOR.closed_loop_t
 
 
 def essential_ops(model: Model, tables: Tables) -> dict[str, dict[str, int]]:
-    """Essential operations per step and per candidate (``opcount``): the cycle bound."""
+    """Essential operations per step and per candidate (``opcount``): the cycle bound (the long-horizon
+    family: ``codegen.mpcc.opcount``)."""
     from codegen.topologies.twolevel import opcount
 
     if isinstance(tables, MpccTables):
-        raise Unsupported(f"{model.source}: the cycle bound of controller.strategy = 'mpcc' is not counted yet "
-                          "(its node count varies per step: docs/mpcc.md \"Node budget\")")
+        from codegen.mpcc import opcount as mpcc_opcount
+
+        return mpcc_opcount.essential_ops(tables)
 
     return opcount.essential_ops(tables)
 
 
 def op_multiplicities(model: Model, tables: Tables, states: np.ndarray, expected: np.ndarray) -> dict[str, np.ndarray]:
-    """Per state, how often each unit of ``essential_ops`` runs: the output's ``n_eval`` candidates."""
+    """Per state, how often each unit of ``essential_ops`` runs: the output's ``n_eval`` candidates (the
+    long-horizon family: ``codegen.mpcc.opcount.multiplicities``)."""
+    if isinstance(tables, MpccTables):
+        from codegen.mpcc import opcount as mpcc_opcount
+
+        return mpcc_opcount.multiplicities(tables, states, expected)
     return {"per_candidate": expected["n_eval"]}
 
 
