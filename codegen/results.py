@@ -84,6 +84,16 @@ def window_cells(info: dict[str, Any]) -> str:
     return f"{span:>17s} {info['f1_hz']:8.4g} {info['n_periods']:7d}"
 
 
+def emit(text: str, out_dir: Path | None, write_all: Any, data: dict[str, Any]) -> None:
+    """A study's result: its markdown ``text`` on stdout when ``out_dir`` is None, else the files
+    ``write_all(out_dir, data, text)`` writes (their paths printed, one a line)."""
+    if out_dir is None:
+        print(text, end="")
+        return
+    for p in write_all(out_dir, data, text):
+        print(p)
+
+
 def write_csv_rows(path: Path, rows: list[dict[str, object]]) -> None:
     """Rows with possibly different keys as one CSV: the union of the keys, in first-seen order."""
     import csv

@@ -36,6 +36,7 @@ import numpy as np
 from codegen.config import family_of, load_config, schema_for
 from codegen.errors import ConfigError, MpcgenError, UsageError
 from codegen.model import Model
+from codegen.results import emit
 
 __all__ = ["HORIZON", "WEIGHT", "RULES", "Match", "check_family", "parse_horizons", "read_bench", "node_statistics",
            "attach_cycles", "command"]
@@ -376,12 +377,7 @@ def command(args: argparse.Namespace, model: Model, log: Log, out_dir: Path | No
     for f in unmatched:
         log(f"study: --bench {f} names none of the study's config hashes; not used")
     data = study_output.assemble(args, model, study, rows, target, timing, wall, runner, unmatched)
-    text = study_output.markdown(data)
-    if out_dir is None:
-        print(text, end="")
-    else:
-        for p in study_output.write_all(out_dir, data, text):
-            print(p)
+    emit(study_output.markdown(data), out_dir, study_output.write_all, data)
     missed = [r for r in rows if r["status"] != "matched"]
     if missed:
         raise MpcgenError("f_ave not matched for " + "; ".join(f"N = {r['horizon']}: {r['status']}" for r in missed))

@@ -69,7 +69,7 @@ from typing import Any
 from codegen.config import REAL, all_fields, family_of, load_config, owners, schema_for
 from codegen.errors import ConfigError, MpcgenError, UsageError
 from codegen.model import Model
-from codegen.results import metric_sets
+from codegen.results import emit, metric_sets
 
 __all__ = ["TuneAxis", "Figure", "FIGURES", "DEFAULT_OBJECTIVES", "SWITCHING_WEIGHTS", "allowed_range", "parse_axis",
            "parse_objectives", "default_objectives", "Search", "runs_of", "evaluate", "dominates", "front", "ranked",
@@ -597,12 +597,8 @@ def command(args: argparse.Namespace, model: Model, log: Log, strategies: list[s
     data = tune_output.assemble(search, model, {"runner": runner.kind, "address": runner.address,
                                                 "workers": runner.workers if runner.kind != "scheduler" else None,
                                                 "wall_s": wall, "rounds": rounds_timing}, log)
-    text = tune_output.markdown(data)
-    if out_dir is None:
-        print(text, end="")
-    else:
-        for p in tune_output.write_all(out_dir, data, text):
-            print(p)
+    emit(tune_output.markdown(data), out_dir, tune_output.write_all, data)
+    if out_dir is not None:
         print(tune_output.summary(data), end="")
     if any(s["recommended"] is None for s in data["strategies"].values()):
         raise MpcgenError("no admissible point for " + ", ".join(
