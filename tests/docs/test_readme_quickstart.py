@@ -30,6 +30,9 @@ EXCEPTIONS: dict[str, str] = {
     "mpcgen tune     examples/seed000_tlevel.toml --weight controller.lambda_psi_nm_per_wb":
         "a long run: about 34 closed-loop runs, each a new controller build, 200 s on a LocalCluster of 2 workers; "
         "tests/stages/test_tune.py runs tune (Dask and --serial, bit for bit) on a short scenario",
+    "mpcgen study    examples/mpcc_spmsm.toml --horizons 1-5":
+        "a long run: per horizon up to 16 closed-loop runs while lambda_u is matched to one switching frequency "
+        "(about 5 minutes on 2 cores); tests/stages/test_study.py runs the study on a short scenario",
     "dask scheduler": "a server on the machine the README calls HOST, running until stopped",
     "dask worker tls://HOST:8786": "joins the scheduler on HOST (a placeholder for another machine) and runs until "
                                    "stopped",
