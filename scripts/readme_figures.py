@@ -137,7 +137,7 @@ def bench_emulated(cfg: str) -> Callable[[Run], tuple[str, dict[str, Any]]]:
         text = ("float32 instructions (median): " + " / ".join(f"{s} {_k(v['median'])}" for s, v in f32.items()) +
                 "; fixed point, the same states: " + " / ".join(f"{_k(v)}" if v else "n/a" for v in fix.values()) +
                 "; estimated M7 cycles (float32, median / max): " +
-                " / ".join(f"{_k(v['cycles']['median'])} / {_k(v['cycles']['max'])}" for v in f32.values()) +
+                ", ".join(f"{s} {_k(v['cycles']['median'])} / {_k(v['cycles']['max'])}" for s, v in f32.items()) +
                 "; estimate / bound: " + " / ".join(f"{v['cycles']['est_over_bound']:.2f}" for v in f32.values()))
         return text, {"float32": f32, "fixed_median": fix, "states": d.get("m7_states")}
     return measure

@@ -11,7 +11,7 @@ import json
 
 import numpy as np
 import pytest
-from hil_support import SPMSM, TLEVEL, run_mode
+from hil_support import ROOT, SPMSM, TLEVEL, run_mode
 
 from codegen.config import load_config
 from codegen.model import Model
@@ -30,8 +30,12 @@ SHORT_2L = {"scenario.duration_s": 0.2, "scenario.speed_ref_rpm": [[0.0, 500.0],
 SHORT_2L_ARGS = ["--set", "scenario.duration_s=0.2", "--set", "scenario.speed_ref_rpm=[[0.0,500.0],[0.1,-500.0]]",
                  "--set", "scenario.load_nm=[[0.0,10.0],[0.05,-10.0]]", "--set", "controller.tables=published"]
 FIXED = {"controller.number_format": "fixed"}
+#: the long-horizon examples (their own family: no MPTC table field), the two-level one shortened like SHORT_2L
+MPCC_SPMSM, MPCC_TLEVEL = ROOT / "examples" / "mpcc_spmsm.toml", ROOT / "examples" / "mpcc_tlevel.toml"
+SHORT_MPCC = {k: v for k, v in SHORT_2L.items() if k != "controller.tables"}
 CASES = [(SPMSM, "s2", SHORT_2L), (SPMSM, "s3", SHORT_2L), (TLEVEL, "mpdtc63", {}), (TLEVEL, "mpdtc27", {}),
-         (SPMSM, "s2", {**SHORT_2L, **FIXED}), (TLEVEL, "mpdtc27", FIXED)]
+         (SPMSM, "s2", {**SHORT_2L, **FIXED}), (TLEVEL, "mpdtc27", FIXED),
+         (MPCC_SPMSM, "mpcc", SHORT_MPCC), (MPCC_TLEVEL, "mpcc", {})]
 IDS = [f"{c.stem}-{s}" + ("-fixed" if o.get("controller.number_format") == "fixed" else "") for c, s, o in CASES]
 
 
