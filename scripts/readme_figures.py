@@ -225,9 +225,11 @@ def tune(run: Run) -> tuple[str, dict[str, Any]]:
     d = json.loads((out / "tune.json").read_text())
     rec = {s: v["recommended"] for s, v in d["strategies"].items()}
     n = sum(len(v["points"]) for v in d["strategies"].values())
-    vals = {s: (r or {}).get("values", r) for s, r in rec.items()}
-    text = (f"{n} points in {d['timing'].get('wall_s', float('nan')):.0f} s; recommended: " +
-            ", ".join(f"{s} {json.dumps(v, sort_keys=True)}" for s, v in vals.items()))
+    vals = {s: ("none admissible" if r is None else
+                ", ".join(f"{k.rpartition('.')[2]} = {v:g}" for k, v in sorted(r["params"].items())))
+            for s, r in rec.items()}
+    text = (f"{n} points in {d['timing'].get('wall_s', float('nan')):.0f} s on {d['timing'].get('workers')} "
+            "workers; recommended: " + "; ".join(f"{s} {v}" for s, v in vals.items()))
     return text, {"recommended": rec, "points": n, "timing": d["timing"]}
 
 
